@@ -1,0 +1,52 @@
+"""Located, user-facing errors.
+
+Every stage reports bad input as :class:`Problem` objects carrying *where* (``file:line:col``,
+``file: goal G3`` or ``file: var_mapping[0].map[1]``) and *what*.  A :class:`MissionError` holds
+one or more problems so that ``check`` can report all of them at once; the CLI turns it into a
+message and an exit status, never a traceback.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One located problem in the mission inputs."""
+
+    where: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.where}: {self.message}" if self.where else self.message
+
+
+class MissionError(Exception):
+    """Invalid mission input (exit status 2 by default)."""
+
+    exit_code = 2
+
+    def __init__(self, problems: Problem | Iterable[Problem] | str, where: str = "") -> None:
+        if isinstance(problems, str):
+            problems = [Problem(where, problems)]
+        elif isinstance(problems, Problem):
+            problems = [problems]
+        self.problems: list[Problem] = list(problems)
+        super().__init__("\n".join(str(p) for p in self.problems))
+
+
+class NoDecompositionError(MissionError):
+    """The mission is well-formed but has no valid mission decomposition (exit status 3)."""
+
+    exit_code = 3
+
+
+def located(file: str, line: int | None = None, column: int | None = None) -> str:
+    """Format a ``file:line:col`` location (omitting unknown parts)."""
+    parts = [file]
+    if line is not None:
+        parts.append(str(line))
+        if column is not None:
+            parts.append(str(column))
+    return ":".join(parts)
