@@ -5,8 +5,16 @@ Every key the original reads is kept; problems are located by key path
 """
 from __future__ import annotations
 
+import json
+import os
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
+
+from lxml import etree
+
+from ..errors import MissionError, Problem, located
+from .knowledge import element_children, parse_tolerant_xml, read_bytes, text_of
 
 
 @dataclass(frozen=True)
@@ -61,8 +69,407 @@ class Configuration:
     type_mapping_entries: tuple[tuple[str, str], ...]  # (hddl_type, ocl_type) in file order
     var_mapping: tuple[VarMapping, ...]
     semantic_mapping: tuple[SemanticMapping, ...]
+    warnings: tuple[str, ...] = ()  # located, non-fatal remarks (e.g. missing xml_root)
+
+    def locate(self, key_path: str) -> str:
+        """``Problem.where`` for a key path such as ``SemanticMapping.where``
+        (``configuration.json: semantic_mapping[2]``); the paths stored in the model carry no
+        file name so that the JSON and XML forms of one configuration compare equal."""
+        return f"{self.source}: {key_path}" if key_path else self.source
 
     @cached_property
     def type_mapping(self) -> dict[str, str]:
         """OCL type -> HDDL type (a later entry with the same OCL type wins)."""
         return {ocl: hddl for hddl, ocl in self.type_mapping_entries}
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading
+#
+# Both formats are first turned into the same plain structure (dicts of strings, lists), the
+# shape PropertyTree gives the original; one validator then reads every key and collects all
+# problems, so a user sees every mistake of a configuration at once.
+
+_MISSING: Any = object()
+SEMANTIC_TYPES = ("attribute", "ownership", "relationship")
+MAPPED_TYPES = ("predicate", "function")
+
+
+def load_configuration(path: str | os.PathLike[str]) -> Configuration:
+    """Read a configuration file; JSON if the extension (upper-cased) is ``JSON``, else XML."""
+    source = os.fspath(path)
+    data = read_bytes(path, "configuration")
+    ext = source.rsplit(".", 1)[-1].upper() if "." in os.path.basename(source) else ""
+    if ext == "JSON":
+        try:
+            text = data.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise MissionError(source, f"configuration is not valid UTF-8: {exc.reason}") from None
+        return parse_configuration_json(text, source)
+    return parse_configuration_xml(data, source)
+
+
+def parse_configuration_json(text: str, source: str) -> Configuration:
+    """Parse a JSON configuration.  Scalars are kept as the text PropertyTree would store
+    (numbers verbatim, ``true``/``false``/``null``)."""
+    try:
+        data = json.loads(text, parse_int=str, parse_float=str, parse_constant=str)
+    except json.JSONDecodeError as exc:
+        raise MissionError(located(source, exc.lineno, exc.colno), f"invalid JSON: {exc.msg}") from None
+    if not isinstance(data, dict):
+        raise MissionError(source, "the configuration must be a JSON object")
+    return _Builder(source).build(data)
+
+
+def parse_configuration_xml(data: bytes | str, source: str) -> Configuration:
+    """Parse an XML configuration (root ``<configuration>``), tolerating the mismatched end
+    tags of the shipped files (``<location_types> ... </location_type>``)."""
+    root = parse_tolerant_xml(data, source, "configuration")
+    builder = _Builder(source)
+    if root.tag != "configuration":
+        raise MissionError(
+            located(source, root.sourceline),
+            f"missing key configuration (the root element is <{root.tag}>)",
+        )
+    return builder.build(_xml_to_plain(root, builder))
+
+
+def _xml_dict(el: etree._Element) -> dict[str, Any]:
+    """Element children as a dict (tag -> text or nested dict); a repeated tag: last wins."""
+    out: dict[str, Any] = {}
+    for c in element_children(el):
+        out[c.tag] = _xml_dict(c) if len(c) and next(element_children(c), None) is not None else text_of(c)
+    return out
+
+
+def _last_child(el: etree._Element, tag: str) -> etree._Element | None:
+    found = None
+    for c in el.iterchildren(tag=tag):
+        found = c
+    return found
+
+
+def _xml_to_plain(root: etree._Element, builder: "_Builder") -> dict[str, Any]:
+    """The XML schema of spec §3 mapped onto the JSON shape (spec §2)."""
+    data: dict[str, Any] = {}
+    for c in element_children(root):
+        tag = c.tag
+        if tag in ("world_db", "output"):
+            data[tag] = _xml_dict(c)
+        elif tag in ("location_types", "agent_types"):
+            data[tag] = [text_of(t) for t in element_children(c)]
+        elif tag == "type_mapping":
+            data[tag] = [_xml_dict(m) for m in element_children(c)]
+        elif tag == "var_mapping":
+            entries = []
+            for m in element_children(c):
+                entry: dict[str, Any] = {}
+                task = _last_child(m, "task_id")
+                if task is not None:
+                    entry["task_id"] = text_of(task)
+                entry["map"] = [
+                    {k: v for k, v in mp.attrib.items() if k in ("gm_var", "hddl_var")}
+                    for mp in m.iterchildren(tag="map")
+                ]
+                entries.append(entry)
+            data[tag] = entries
+        elif tag == "semantic_mapping":
+            entries = []
+            for i, m in enumerate(element_children(c)):
+                entry = _xml_dict(m)
+                mp = _last_child(m, "map")
+                if mp is not None:
+                    entry["map"] = _xml_map(mp, f"semantic_mapping[{i}].map", builder)
+                entries.append(entry)
+            data[tag] = entries
+        else:
+            data[tag] = _xml_dict(c)  # unknown keys are ignored by the validator
+    return data
+
+
+def _xml_map(mp: etree._Element, path: str, builder: "_Builder") -> dict[str, Any]:
+    """``<map><pred>p</pred><arg_sorts number="N">s1 s2</arg_sorts></map>``: the first N
+    whitespace-separated tokens are the argument sorts."""
+    out: dict[str, Any] = {}
+    pred = _last_child(mp, "pred")
+    if pred is not None:
+        out["pred"] = text_of(pred)
+    sorts = _last_child(mp, "arg_sorts")
+    if sorts is not None:
+        tokens = text_of(sorts).split()
+        number = sorts.get("number")
+        if number is None:
+            builder.problem(f"{path}.arg_sorts", "missing attribute [number] in arg_sorts")
+            out["arg_sorts"] = tokens
+        else:
+            try:
+                n = int(number.strip())
+            except ValueError:
+                builder.problem(f"{path}.arg_sorts", f"invalid attribute number [{number}] in arg_sorts")
+                n = len(tokens)
+            if n < 0 or n > len(tokens):
+                builder.problem(
+                    f"{path}.arg_sorts", f"arg_sorts declares {number.strip()} sorts but lists {len(tokens)}"
+                )
+            out["arg_sorts"] = tokens[: max(n, 0)]
+    return out
+
+
+class _Builder:
+    """Validates the plain structure and builds the :class:`Configuration`."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self.problems: list[Problem] = []
+        self.warnings: list[str] = []
+
+    # -- reporting ----------------------------------------------------------------------------
+
+    def problem(self, path: str, message: str) -> None:
+        self.problems.append(Problem(f"{self.source}: {path}", message))
+
+    def warn(self, path: str, message: str) -> None:
+        self.warnings.append(f"{self.source}: {path}: {message}")
+
+    # -- typed access -------------------------------------------------------------------------
+
+    def scalar(self, obj: dict[str, Any], key: str, path: str, missing: str | None = None) -> str | None:
+        """``obj[key]`` as a string; a missing key reports ``missing`` (default ``missing key``)."""
+        value = obj.get(key, _MISSING)
+        full = f"{path}.{key}" if path else key
+        if value is _MISSING:
+            if missing is not None:
+                self.problem(full, missing)
+            return None
+        if isinstance(value, bool):
+            return "true" if value else "false"
+        if value is None:
+            return "null"
+        if isinstance(value, str):
+            return value
+        self.problem(full, f"expected a value, found {'a list' if isinstance(value, list) else 'an object'}")
+        return None
+
+    def obj(self, value: Any, path: str) -> dict[str, Any] | None:
+        if isinstance(value, dict):
+            return value
+        if isinstance(value, str) and not value.strip():
+            return {}  # an empty XML element / empty JSON string: no children
+        self.problem(path, "expected an object")
+        return None
+
+    def lst(self, value: Any, path: str) -> list[Any] | None:
+        if isinstance(value, list):
+            return value
+        if isinstance(value, str) and not value.strip() or value == {}:
+            return []
+        self.problem(path, "expected a list")
+        return None
+
+    def strings(self, value: Any, path: str) -> tuple[str, ...]:
+        items = self.lst(value, path)
+        out: list[str] = []
+        for i, item in enumerate(items or ()):
+            if isinstance(item, (dict, list)):
+                self.problem(f"{path}[{i}]", "expected a string")
+            else:
+                out.append(self.scalar({"_": item}, "_", "") or "")
+        return tuple(out)
+
+    # -- sections -----------------------------------------------------------------------------
+
+    def build(self, data: dict[str, Any]) -> Configuration:
+        world_db = self.world_db(data)
+        output = self.output(data)
+        location_types = self.strings(data.get("location_types", []), "location_types")
+        agent_types = self.strings(data.get("agent_types", []), "agent_types")
+        type_mapping = self.type_mapping(data.get("type_mapping", []))
+        var_mapping = self.var_mapping(data)
+        semantic = self.semantic_mapping(data)
+        if self.problems or world_db is None or output is None:
+            raise MissionError(self.problems)
+        return Configuration(
+            source=self.source,
+            world_db=world_db,
+            output=output,
+            location_types=location_types,
+            agent_types=agent_types,
+            type_mapping_entries=type_mapping,
+            var_mapping=var_mapping,
+            semantic_mapping=semantic,
+            warnings=tuple(self.warnings),
+        )
+
+    def world_db(self, data: dict[str, Any]) -> WorldDbConfig | None:
+        if "world_db" not in data:
+            self.problem("world_db", "Knowledge [world_db] was not defined in the configuration file")
+            return None
+        wd = self.obj(data["world_db"], "world_db")
+        if wd is None:
+            return None
+        ok = True
+        db_type = self.scalar(wd, "type", "world_db", "Database type for [world_db] was not defined")
+        if db_type is None:
+            ok = False
+        elif db_type.lower() != "file":
+            self.problem("world_db.type", f"Database type [{db_type}] is not supported")
+            ok = False
+        file_type = self.scalar(wd, "file_type", "world_db", "Database file type for [world_db] was not defined")
+        if file_type is None:
+            ok = False
+        elif file_type.lower() != "xml":
+            self.problem("world_db.file_type", f"Database file type [{file_type}] is not supported")
+            ok = False
+        path = self.scalar(wd, "path", "world_db", "Missing attributes [path] in world_db definition")
+        xml_root = self.scalar(wd, "xml_root", "world_db")
+        if not xml_root:
+            # the original prints a warning and waits for ENTER; we never block on stdin
+            self.warn(
+                "world_db.xml_root",
+                "xml_root was not defined: the document root element is used as the record container",
+            )
+            xml_root = None
+        unique_id = self.scalar(wd, "unique_id", "world_db") or "name"
+        if not ok or path is None:
+            return None
+        return WorldDbConfig(db_type.lower(), file_type.lower(), path, xml_root, unique_id)  # type: ignore[union-attr]
+
+    def output(self, data: dict[str, Any]) -> OutputConfig | None:
+        if "output" not in data:
+            self.problem("output", "Output [output] was not defined in the configuration file")
+            return None
+        out = self.obj(data["output"], "output")
+        if out is None:
+            return None
+        ok = True
+        output_type = self.scalar(out, "output_type", "output", "missing key output.output_type")
+        if output_type is None:
+            ok = False
+        elif output_type.lower() != "file":
+            self.problem("output.output_type", f"Output type [{output_type}] is not supported")
+            ok = False
+        file_type = self.scalar(out, "file_type", "output", "missing key output.file_type")
+        if file_type is None:
+            ok = False
+        elif file_type.lower() not in ("json", "xml"):
+            self.problem("output.file_type", f"File type [{file_type}] is not supported")
+            ok = False
+        file_path = self.scalar(out, "file_path", "output", "missing key output.file_path")
+        if not ok or file_path is None:
+            return None
+        return OutputConfig(output_type.lower(), file_type.lower(), file_path)  # type: ignore[union-attr]
+
+    def type_mapping(self, value: Any) -> tuple[tuple[str, str], ...]:
+        out: list[tuple[str, str]] = []
+        for i, entry in enumerate(self.lst(value, "type_mapping") or ()):
+            path = f"type_mapping[{i}]"
+            e = self.obj(entry, path)
+            if e is None:
+                continue
+            hddl = self.scalar(e, "hddl_type", path, "missing key hddl_type")
+            ocl = self.scalar(e, "ocl_type", path, "missing key ocl_type")
+            if hddl is not None and ocl is not None:
+                out.append((hddl, ocl))
+        return tuple(out)
+
+    def var_mapping(self, data: dict[str, Any]) -> tuple[VarMapping, ...]:
+        if "var_mapping" not in data:
+            self.problem("var_mapping", "missing key var_mapping")
+            return ()
+        out: list[VarMapping] = []
+        for i, entry in enumerate(self.lst(data["var_mapping"], "var_mapping") or ()):
+            path = f"var_mapping[{i}]"
+            e = self.obj(entry, path)
+            if e is None:
+                continue
+            task_id = self.scalar(e, "task_id", path, "missing key task_id")
+            pairs: list[tuple[str, str]] = []
+            if "map" not in e:
+                self.problem(f"{path}.map", "missing key map")
+            for j, m in enumerate(self.lst(e.get("map", []), f"{path}.map") or ()):
+                mpath = f"{path}.map[{j}]"
+                mo = self.obj(m, mpath)
+                if mo is None:
+                    continue
+                gm_var = self.scalar(mo, "gm_var", mpath, f"missing key map[{j}].gm_var")
+                hddl_var = self.scalar(mo, "hddl_var", mpath, f"missing key map[{j}].hddl_var")
+                if gm_var is not None and hddl_var is not None:
+                    pairs.append((gm_var, hddl_var))
+            if task_id is not None:
+                out.append(VarMapping(task_id, tuple(pairs), path))
+        return tuple(out)
+
+    def semantic_mapping(self, data: dict[str, Any]) -> tuple[SemanticMapping, ...]:
+        if "semantic_mapping" not in data:
+            self.problem("semantic_mapping", "missing key semantic_mapping")
+            return ()
+        out: list[SemanticMapping] = []
+        for i, entry in enumerate(self.lst(data["semantic_mapping"], "semantic_mapping") or ()):
+            path = f"semantic_mapping[{i}]"
+            e = self.obj(entry, path)
+            if e is not None:
+                m = self.one_semantic(e, path)
+                if m is not None:
+                    out.append(m)
+        return tuple(out)
+
+    def one_semantic(self, e: dict[str, Any], path: str) -> SemanticMapping | None:
+        """One semantic mapping (spec §4); every required field of its kind is checked."""
+        before = len(self.problems)
+
+        def req(key: str) -> str:
+            return self.scalar(e, key, path, f"missing key {key}") or ""
+
+        kind_raw = self.scalar(e, "type", path, "missing key type")
+        kind = kind_raw.lower() if kind_raw is not None else ""
+        mapped_raw = self.scalar(e, "mapped_type", path, "missing key mapped_type")
+        mapped = mapped_raw.lower() if mapped_raw is not None else ""
+        if mapped_raw is not None and mapped not in MAPPED_TYPES:
+            self.warn(f"{path}.mapped_type", f"mapped_type [{mapped_raw}] is neither predicate nor function: mapping ignored")
+        pred = ""
+        arg_sorts: tuple[str, ...] = ()
+        if "map" not in e:
+            self.problem(f"{path}.map", "missing key map")
+        else:
+            mp = self.obj(e["map"], f"{path}.map")
+            if mp is not None:
+                pred = self.scalar(mp, "pred", f"{path}.map", "missing key map.pred") or ""
+                if "arg_sorts" not in mp:
+                    self.problem(f"{path}.map.arg_sorts", "missing key map.arg_sorts")
+                else:
+                    arg_sorts = self.strings(mp["arg_sorts"], f"{path}.map.arg_sorts")
+        predicate_type = self.scalar(e, "predicate_type", path)
+        fields: dict[str, str] = {}
+        if kind_raw is None:
+            pass
+        elif kind == "attribute":
+            fields["name"] = req("name")
+            fields["relates_to"] = req("relates_to")
+            if fields["relates_to"].lower() != "robot":
+                fields["belongs_to"] = req("belongs_to")
+            else:
+                fields["belongs_to"] = self.scalar(e, "belongs_to", path) or ""
+        elif kind in ("ownership", "relationship"):
+            if kind == "ownership":
+                fields["owner"] = req("owner")
+                fields["owned"] = req("owned")
+            else:
+                fields["main_entity"] = req("main_entity")
+                fields["related_entity"] = req("related_entity")
+            fields["relationship_type"] = req("relationship_type")
+            if fields["relationship_type"] == "attribute":
+                fields["attribute_name"] = req("attribute_name")
+            fields["belongs_to"] = req("belongs_to")
+        else:
+            self.problem(f"{path}.type", f"No mapping type [{kind_raw}] for semantic mappings.")
+        if len(self.problems) > before:
+            return None
+        return SemanticMapping(
+            type=kind,
+            mapped_type=mapped,
+            pred=pred,
+            arg_sorts=arg_sorts,
+            predicate_type=predicate_type,
+            where=path,
+            **fields,
+        )

@@ -10,7 +10,16 @@ Each has a lark grammar in ``grammars/``; syntax errors raise
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from typing import Iterable
+
+from lark import Lark, Token, Transformer
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from ..errors import MissionError
 
 # ---------------------------------------------------------------------------------------------
 # Runtime annotations
@@ -90,3 +99,357 @@ class ForAll:
     condition: Condition | None
     condition_text: str
     text: str
+
+
+# ---------------------------------------------------------------------------------------------
+# Parsers.  The Lark instances are built once (lazily, on first use) and the parse functions are
+# memoised: the same few expressions are parsed once per goal-model instance, i.e. thousands of
+# times for large worlds, and every result is an immutable value.
+
+
+def _grammar(name: str) -> str:
+    """Read a grammar shipped as package data (``mutrose_cp/grammars/<name>``)."""
+    return resources.files("mutrose_cp").joinpath("grammars", name).read_text(encoding="utf-8")
+
+
+def _merge_annotation(op: str, operands: Iterable[Annotation]) -> AnnotationOp:
+    """Build an operator node, splicing in operands of the same kind (spec §5 flattening)."""
+    children: list[Annotation] = []
+    for operand in operands:
+        if isinstance(operand, AnnotationOp) and operand.op == op:
+            children.extend(operand.children)
+        else:
+            children.append(operand)
+    return AnnotationOp(op, tuple(children))
+
+
+def _merge_condition(op: str, operands: Iterable[Condition]) -> BoolOp:
+    """Build a ``&&``/``||`` node, splicing in operands of the same operator.
+
+    Both operators are associative for every evaluator (and the original's select ``||`` bug,
+    "keep only the left operand", gives the same result on ``(a||b)||c`` and ``a||b||c``), so
+    flattening loses nothing and keeps trees shallow.
+    """
+    children: list[Condition] = []
+    for operand in operands:
+        if isinstance(operand, BoolOp) and operand.op == op:
+            children.extend(operand.children)
+        else:
+            children.append(operand)
+    return BoolOp(op, tuple(children))
+
+
+class _AnnotationBuilder(Transformer):  # type: ignore[type-arg]
+    """Turns the ``annotation.lark`` parse into ``(id, Annotation | None)`` while parsing."""
+
+    def start(self, children: list) -> tuple[str, Annotation | None]:
+        name, _description, annotation = children
+        return str(name), annotation
+
+    def description(self, _children: list) -> None:
+        return None
+
+    def annot(self, children: list) -> Annotation | None:
+        return children[0]  # None for empty brackets
+
+    def leaf(self, children: list) -> AnnotationLeaf:
+        return AnnotationLeaf(str(children[0]))
+
+    def seq_op(self, children: list) -> AnnotationOp:
+        return _merge_annotation(";", children)
+
+    def par_op(self, children: list) -> AnnotationOp:
+        return _merge_annotation("#", children)
+
+    def fallback_op(self, children: list) -> AnnotationOp:
+        return _merge_annotation("FALLBACK", children)
+
+
+class _ConditionBuilder(Transformer):  # type: ignore[type-arg]
+    """Turns the ``condition.lark`` parse into a :data:`Condition` (or None) while parsing."""
+
+    def start(self, children: list) -> Condition | None:
+        return children[0]
+
+    def atom(self, children: list) -> Atom:
+        return make_atom(str(children[0]))
+
+    def and_op(self, children: list) -> BoolOp:
+        return _merge_condition("&&", children)
+
+    def or_op(self, children: list) -> BoolOp:
+        return _merge_condition("||", children)
+
+
+@lru_cache(maxsize=None)
+def _annotation_parser() -> Lark:
+    # lexer="basic" (not the contextual lexer) so that FALLBACK is always the keyword, even
+    # among description words, exactly like the original flex lexer.
+    return Lark(
+        _grammar("annotation.lark"),
+        parser="lalr",
+        lexer="basic",
+        transformer=_AnnotationBuilder(),
+        maybe_placeholders=True,
+    )
+
+
+@lru_cache(maxsize=None)
+def _condition_parser() -> Lark:
+    return Lark(
+        _grammar("condition.lark"),
+        parser="lalr",
+        lexer="basic",
+        transformer=_ConditionBuilder(),
+        maybe_placeholders=True,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Syntax error messages: "Parse error in <what>: <expression>: column <n>: expected <...>"
+
+_ANNOTATION_TERMINALS = {
+    "NAME": "a goal or task name",
+    "_FALLBACK": "FALLBACK",
+    "_LPAR": "'('",
+    "_RPAR": "')'",
+    "_COMMA": "','",
+    "_SEQ": "';'",
+    "_PAR": "'#'",
+    "_LSQB": "'['",
+    "_RSQB": "']'",
+    "_COLON": "':'",
+    "$END": "end of text",
+}
+
+_CONDITION_TERMINALS = {
+    "ATOM": "an atom such as v.attr",
+    "_LPAR": "'('",
+    "_AND": "'&&'",
+    "_OR": "'||'",
+    "_RPAR": "')'",
+    "$END": "end of expression",
+}
+
+# Terminals that start an operand; when a name/atom is acceptable, naming the name alone reads
+# better than listing every way an operand can start.
+_OPERAND_STARTS = {"NAME": {"_LPAR", "_FALLBACK"}, "ATOM": {"_LPAR"}}
+
+
+def _join_alternatives(words: list[str]) -> str:
+    if not words:
+        return "nothing"
+    if len(words) == 1:
+        return words[0]
+    return ", ".join(words[:-1]) + " or " + words[-1]
+
+
+def _expected_text(expected: Iterable[str], names: dict[str, str], overrides: dict[str, str]) -> str:
+    wanted = set(expected)
+    for operand, starts in _OPERAND_STARTS.items():
+        if operand in wanted:
+            wanted -= starts
+    table = {**names, **overrides}
+    return _join_alternatives([table[t] for t in table if t in wanted])
+
+
+def _error_position(err: UnexpectedInput, text: str) -> int:
+    """0-based offset of the offending token (the end of the text for an early end of input)."""
+    if isinstance(err, UnexpectedToken):
+        if err.token.type == "$END":
+            return len(text)
+        return int(err.token.start_pos or 0)
+    if isinstance(err, UnexpectedEOF):
+        return len(text)
+    if isinstance(err, UnexpectedCharacters):
+        return int(err.pos_in_stream)
+    return int(getattr(err, "pos_in_stream", 0) or 0)
+
+
+def _expected_terminals(parser: Lark, text: str, err: UnexpectedInput, pos: int) -> set[str]:
+    """Terminals that can really come at ``pos`` (where the parse failed).
+
+    LALR detects an error only after reducing with the offending look-ahead, and its states
+    share look-aheads from other contexts, so ``err.expected`` is both too wide (']' inside
+    parentheses) and too narrow ('#' after the reduction to ';').  Errors are rare, so replay
+    the tokens before ``pos`` and ask the interactive parser which terminals it accepts there.
+    """
+    try:
+        interactive = parser.parse_interactive(text)
+        for token in interactive.iter_parse():  # yields each token before feeding it
+            if token.start_pos is not None and token.start_pos >= pos:
+                break
+        return set(interactive.accepts())
+    except UnexpectedInput:
+        pass
+    if isinstance(err, (UnexpectedToken, UnexpectedEOF)):
+        return set(err.expected)
+    if isinstance(err, UnexpectedCharacters):
+        return set(err.allowed or ())
+    return set()
+
+
+# ---------------------------------------------------------------------------------------------
+# Runtime annotations
+
+
+@lru_cache(maxsize=4096)
+def parse_node_text(text: str) -> tuple[str, Annotation | None]:
+    """Parse a whole goal text ``G3: description words [annotation]`` (spec §2.1, §5).
+
+    Returns the name before ``:`` and the annotation (None for no or empty brackets).  The
+    whole text is parsed, as in the original, so a stray ``,``/``;``/``:`` or the word FALLBACK
+    in the description is a syntax error; other characters outside the grammar are skipped.
+    Raises :class:`MissionError` ``Parse error in runtime annotation: <expr>: column <n>:
+    expected <...>`` where ``<expr>`` is the bracketed annotation when the error lies inside it
+    (the column then counts from its ``[``), else the whole text.
+    """
+    try:
+        return _annotation_parser().parse(text)  # type: ignore[no-any-return]
+    except UnexpectedInput as err:
+        raise _annotation_error(text, err) from None
+
+
+def _annotation_error(text: str, err: UnexpectedInput) -> MissionError:
+    pos = _error_position(err, text)
+    bracket = text.find("[")  # '[' is always a token: no skipped character can be '['
+    colon = text.find(":")
+    if bracket != -1 and pos >= bracket:
+        shown, column, name = text[bracket:], pos - bracket + 1, "a goal or task name"
+    else:
+        shown, column = text, pos + 1
+        name = "a goal id such as G1" if colon == -1 or pos <= colon else "a description word"
+    terminals = _expected_terminals(_annotation_parser(), text, err, pos)
+    expected = _expected_text(terminals, _ANNOTATION_TERMINALS, {"NAME": name})
+    return MissionError(f"Parse error in runtime annotation: {shown}: column {column}: expected {expected}")
+
+
+# ---------------------------------------------------------------------------------------------
+# Conditions
+
+_NOT_PREFIX = re.compile(r"not\s+")
+_IN_ATOM = re.compile(r"(\S+)\s+in\s+(.*)", re.S)
+# The first comparison operator wins; longer spellings are tried first at that position.  The
+# original reads ``==`` like ``=`` in selects (the right side is the first identifier after the
+# first '='), so it is normalised to ``=`` here.
+_COMPARISON_ATOM = re.compile(r"(.*?)\s*(==|<>|>=|<=|=|>|<)\s*(.*)", re.S)
+
+
+@lru_cache(maxsize=4096)
+def make_atom(text: str) -> Atom:
+    """Split an atom's text into the structured fields of :class:`Atom` (best effort).
+
+    ``!v.a`` / ``not v.a`` set ``negated``; ``l in r`` gives op ``in``; otherwise the first
+    comparison operator splits left and right.  ``variable``/``attribute`` come from the left
+    operand split at its first '.'; ``value`` is the right side trimmed, quotes stripped.  The
+    evaluators decide which forms they accept (spec §8.1, §9) using ``text`` where needed.
+    """
+    text = text.rstrip()
+    body = text
+    negated = False
+    if body.startswith("!"):
+        negated, body = True, body[1:].lstrip()
+    elif (m := _NOT_PREFIX.match(body)) is not None:
+        negated, body = True, body[m.end() :]
+    op: str | None = None
+    value = ""
+    left = body
+    if (m := _IN_ATOM.fullmatch(body)) is not None:
+        left, op, value = m[1], "in", m[2]
+    elif (m := _COMPARISON_ATOM.fullmatch(body)) is not None:
+        left, op, value = m[1], ("=" if m[2] == "==" else m[2]), m[3]
+    value = value.strip().strip('"').strip()
+    variable, _, attribute = left.strip().partition(".")
+    return Atom(text=text, variable=variable, attribute=attribute, negated=negated, op=op, value=value)
+
+
+@lru_cache(maxsize=4096)
+def _parse_condition_in(source: str, what: str, shown: str, offset: int) -> Condition | None:
+    """Parse ``source``, which sits at ``offset`` inside ``shown`` (for error columns)."""
+    try:
+        return _condition_parser().parse(source)  # type: ignore[no-any-return]
+    except UnexpectedInput as err:
+        pos = _error_position(err, source)
+        terminals = _expected_terminals(_condition_parser(), source, err, pos)
+        expected = _expected_text(terminals, _CONDITION_TERMINALS, {})
+        column = offset + pos + 1
+        raise MissionError(
+            f"Parse error in {what}: {shown}: column {column}: expected {expected}"
+        ) from None
+
+
+def parse_condition(text: str) -> Condition | None:
+    """Parse a condition (spec §9); None for an empty/blank one.
+
+    ``||`` binds tighter than ``&&`` (``a && b || c`` == ``a && (b || c)``), as in the original.
+    Raises :class:`MissionError` ``Parse error in condition: <text>: column <n>: expected ...``.
+    """
+    return _parse_condition_in(text, "condition", text, 0)
+
+
+# ---------------------------------------------------------------------------------------------
+# select / forAll.  The validating regexes are the original's (spec §7, §8), applied to the whole
+# value; the parts are then extracted the way the original does (first '>', '(', ':', '|', and
+# the condition ends at the first ')' after '|').
+
+_SELECT_RE = re.compile(
+    r"[a-zA-Z]{1}[\w.]*(->select)[(][a-zA-Z]{1}[\w.]*[:][a-zA-Z]+[\w.]+[ ]*[|][ ]*(.*)[)]", re.ASCII
+)
+_FORALL_RE = re.compile(r"[a-zA-Z]+[\w.]*(->forAll)[(][a-zA-Z]+[\w.]*[ ]*[|][ ]*(.)*[)]", re.ASCII)
+_IDENTIFIER = re.compile(r"[a-zA-Z]+[\w.]*", re.ASCII)
+
+
+def _first_identifier(text: str) -> str:
+    m = _IDENTIFIER.search(text)
+    return m.group() if m else ""
+
+
+@lru_cache(maxsize=1024)
+def parse_select(text: str) -> Select:
+    """Parse a ``QueriedProperty`` ``queried->select(var:Type | condition)`` (spec §8).
+
+    Raises :class:`MissionError` ``Invalid select statement <text> in GM.`` when the value does
+    not match the original's regex (e.g. empty, spaces around ':', a one-letter type), and
+    ``Parse error in query: ...`` for a bad condition.
+    """
+    if _SELECT_RE.fullmatch(text) is None:
+        raise MissionError(f"Invalid select statement {text} in GM.")
+    arrow = text.index(">")
+    colon = text.index(":", arrow)
+    paren = text.index("(", arrow)
+    bar = text.index("|", colon)
+    close = text.index(")", bar)
+    source = text[bar + 1 : close]
+    return Select(
+        queried=_first_identifier(text[:arrow]),
+        variable=_first_identifier(text[paren + 1 : colon]),
+        type=_first_identifier(text[colon + 1 : bar]),
+        condition=_parse_condition_in(source, "query", text, bar + 1),
+        text=text,
+    )
+
+
+@lru_cache(maxsize=1024)
+def parse_forall(text: str) -> ForAll:
+    """Parse a universal ``AchieveCondition`` ``iterated->forAll(iteration | condition)`` (§7).
+
+    The condition is the text between ``|`` and the first ``)`` (so it cannot contain
+    parentheses, as in the original) and may be empty (condition None).  Raises
+    :class:`MissionError` ``Invalid forAll statement <text> in GM.`` when the original's regex
+    does not match (e.g. a typed iteration variable ``x : T``), ``Parse error in condition: ...``
+    for a bad condition.
+    """
+    if _FORALL_RE.fullmatch(text) is None:
+        raise MissionError(f"Invalid forAll statement {text} in GM.")
+    arrow = text.index(">")
+    bar = text.index("|", arrow)
+    head = text[arrow + 1 : bar]
+    close = text.index(")", bar)
+    source = text[bar + 1 : close]
+    return ForAll(
+        iterated=_first_identifier(text[:arrow]),
+        iteration=_first_identifier(head[head.find("(") + 1 :]),
+        condition=_parse_condition_in(source, "condition", text, bar + 1),
+        condition_text=source.strip(),
+        text=text,
+    )

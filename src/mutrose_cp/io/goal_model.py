@@ -6,10 +6,25 @@ custom property, and parses the embedded expressions.  Problems are collected pe
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+import os
+import re
+from dataclasses import dataclass, field
 from functools import cached_property
+from pathlib import Path
+from typing import Any, Callable, TypeVar
 
-from .expressions import Annotation, Condition, ForAll, Select
+from ..errors import MissionError, Problem, located
+from .expressions import (
+    Annotation,
+    Condition,
+    ForAll,
+    Select,
+    parse_condition,
+    parse_forall,
+    parse_node_text,
+    parse_select,
+)
 
 
 @dataclass(frozen=True)
@@ -93,3 +108,517 @@ class GoalModel:
 
     def node(self, node_id: str) -> GMNode:
         return self.by_id[node_id]
+
+
+# ---------------------------------------------------------------------------------------------
+# Reader
+
+ISTAR_GOAL = "istar.Goal"
+ISTAR_TASK = "istar.Task"
+OR_REFINEMENT = "istar.OrRefinementLink"
+
+GOAL_TYPES = ("Perform", "Achieve", "Query")
+
+#: customProperties keys the original accepts (case-sensitive); anything else is an error.
+KNOWN_PROPERTIES = frozenset(
+    {
+        "Description",
+        "GoalType",
+        "Controls",
+        "Monitors",
+        "CreationCondition",
+        "AchieveCondition",
+        "QueriedProperty",
+        "Group",
+        "Divisible",
+        "Location",
+        "Params",
+        "RobotNumber",
+    }
+)
+
+_GOAL_ID = re.compile(r"G[0-9]+")
+_TASK_ID = re.compile(r"[AT]{2}[0-9]+")  # the original's class: TA1 would match too
+_TASK_NAME = re.compile(r"[a-zA-Z]+")
+# The original's character classes, including the C++ ``A-z`` range that also admits
+# ``[\]^_` `` (which is why ``current_room`` is one name).
+_VAR_NAME = re.compile(r"[a-zA-Z][a-zA-z0-9]*")
+_VAR_TYPE = re.compile(r"[a-zA-z0-9]+([(][a-zA-z]+[)])?")
+_ROBOTS_RANGE = re.compile(r"\[(\d+),(\d+)\]", re.ASCII)
+_ROBOTS_FIXED = re.compile(r"\d+", re.ASCII)
+
+_T = TypeVar("_T")
+
+
+def load_goal_model(path: str | os.PathLike[str]) -> GoalModel:
+    """Read and parse a goal model file (any extension; the examples use ``.txt``).
+
+    Raises :class:`MissionError` located at the path when the file is missing or unreadable,
+    at ``file:line:col`` for invalid JSON, and with every node/link problem otherwise.
+    """
+    source = os.fspath(path)
+    try:
+        text = Path(source).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise MissionError("goal model file not found", source) from None
+    except UnicodeDecodeError as err:
+        raise MissionError(f"goal model is not UTF-8 text (byte {err.start})", source) from None
+    except OSError as err:
+        raise MissionError(f"cannot read goal model: {err.strerror or err}", source) from None
+    return parse_goal_model(text, source)
+
+
+def parse_goal_model(text: str, source: str) -> GoalModel:
+    """Parse piStar/GODA JSON text (``source`` names it in messages) into a :class:`GoalModel`.
+
+    All problems of all nodes and links are collected and raised together as one
+    :class:`MissionError`; each is located as ``<source>: goal G3`` / ``task AT1`` /
+    ``node <piStar id>`` / ``link <piStar id>``.
+    """
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise MissionError(Problem(located(source, err.lineno, err.colno), f"invalid JSON: {err.msg}")) from None
+    return _Reader(source).read(data)
+
+
+def _scalar_text(value: Any) -> str | None:
+    """A JSON scalar as the text the original's property-tree parser would give (None: not a scalar)."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return json.dumps(value)
+    if value is None:
+        return "null"
+    return None
+
+
+def _number(value: Any) -> float | None:
+    """A coordinate: a JSON number, or a numeric string (the original reads every scalar as text)."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, (int, float)):
+        return float(value)
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return None
+    return None
+
+
+def _flag(value: str | None) -> tuple[bool, bool]:
+    """``Group``/``Divisible``: (value, recognised).  ``True``/``False`` in any case, else True."""
+    if value is None:
+        return True, True
+    lowered = value.lower()
+    if lowered in ("true", "false"):
+        return lowered == "true", True
+    return True, False
+
+
+def parse_var_decls(value: str) -> tuple[VarDecl, ...]:
+    """``Controls``/``Monitors``: comma separated ``name : Type`` (spec §4.1).
+
+    Raises ValueError ``Invalid variable declaration <piece> in GM.`` for a piece without a name.
+    """
+    value = value.strip()
+    if not value:
+        return ()
+    decls: list[VarDecl] = []
+    for piece in value.split(","):
+        left, _, right = piece.partition(":")
+        name = _VAR_NAME.search(left)
+        if name is None:
+            raise ValueError(f"Invalid variable declaration {piece} in GM.")
+        words = right.split()
+        type_match = _VAR_TYPE.search(words[0]) if words else None
+        decls.append(VarDecl(name.group(), type_match.group() if type_match else ""))
+    return tuple(decls)
+
+
+def parse_robot_number(value: str) -> RobotNumber:
+    """``RobotNumber`` (already trimmed): ``n`` or ``[n1,n2]`` with no inner spaces (spec §4).
+
+    Raises ValueError ``Invalid declaration of robot number: <text>``.
+    """
+    if (m := _ROBOTS_RANGE.fullmatch(value)) is not None:
+        low, high = int(m[1]), int(m[2])
+        if low > high:
+            raise ValueError(
+                f"Invalid declaration of robot number: {value} (lower bound greater than upper bound)"
+            )
+        return RobotNumber(low, high, fixed=False)
+    if _ROBOTS_FIXED.fullmatch(value) is not None:
+        return RobotNumber(int(value), int(value), fixed=True)
+    raise ValueError(f"Invalid declaration of robot number: {value}")
+
+
+def parse_params(value: str) -> tuple[str, ...]:
+    """``Params``: comma separated variable names, each trimmed; empty pieces are dropped."""
+    return tuple(p for p in (piece.strip() for piece in value.split(",")) if p)
+
+
+@dataclass
+class _Draft:
+    """A node as read, before the tree fields (children/parent/or_decomposed) are known."""
+
+    index: int  # position in the file's node list
+    uid: str
+    id: str
+    kind: str
+    x: float
+    where: str
+    fields: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class _Link:
+    id: str
+    type: str
+    child: int  # index into the drafts list
+    parent: int
+
+
+class _Reader:
+    """One goal-model read: collects problems and warnings, builds the tree."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self.problems: list[Problem] = []
+        self.warnings: list[str] = []
+
+    # -- reporting ------------------------------------------------------------------------------
+
+    def _where(self, what: str) -> str:
+        return f"{self.source}: {what}" if self.source else what
+
+    def problem(self, what: str, message: str) -> None:
+        self.problems.append(Problem(self._where(what), message))
+
+    def warn(self, what: str, message: str) -> None:
+        self.warnings.append(str(Problem(self._where(what), message)))
+
+    def _raise_if_problems(self) -> None:
+        if self.problems:
+            raise MissionError(self.problems)
+
+    def _attempt(self, what: str, prefix: str, parse: Callable[[], _T]) -> _T | None:
+        """Run a property parser, turning its error into a located problem (None on error)."""
+        try:
+            return parse()
+        except MissionError as err:
+            for p in err.problems:
+                self.problem(what, f"{prefix}{p.message}")
+        except ValueError as err:
+            self.problem(what, f"{prefix}{err}")
+        return None
+
+    # -- top level ------------------------------------------------------------------------------
+
+    def read(self, data: Any) -> GoalModel:
+        top = self.source or "goal model"
+        if not isinstance(data, dict):
+            raise MissionError("the goal model must be a JSON object (piStar format)", self.source)
+        actors = data.get("actors")
+        if not isinstance(actors, list) or not actors:
+            self.problem("actors", "the goal model has no 'actors' array with an actor")
+            actors = []
+        # The original overwrites its node list for every actor that has one: the last wins.
+        raw_nodes: Any = None
+        for actor in actors:
+            if isinstance(actor, dict) and "nodes" in actor:
+                raw_nodes = actor["nodes"]
+        if len(actors) > 1:
+            self.warn("actors", f"{len(actors)} actors: only the nodes of the last actor with nodes are used")
+        if actors and not isinstance(raw_nodes, list):
+            self.problem("actors", "no actor has a 'nodes' array")
+        raw_links = data.get("links")
+        if not isinstance(raw_links, list):
+            self.problem("links", "the goal model has no 'links' array")
+            raw_links = []
+
+        drafts = [d for i, raw in enumerate(raw_nodes or []) if (d := self._read_node(i, raw)) is not None]
+        by_uid: dict[str, int] = {}
+        for position, draft in enumerate(drafts):
+            if draft.uid in by_uid:
+                other = drafts[by_uid[draft.uid]]
+                self.problem(draft.where, f"duplicate piStar node id {draft.uid} (also used by {other.where})")
+            else:
+                by_uid[draft.uid] = position
+        links = [k for i, raw in enumerate(raw_links) if (k := self._read_link(i, raw, by_uid)) is not None]
+        self._raise_if_problems()
+        if not drafts:
+            raise MissionError("the goal model has no nodes", top)
+        return self._build(drafts, links)
+
+    # -- nodes ----------------------------------------------------------------------------------
+
+    def _read_node(self, index: int, raw: Any) -> _Draft | None:
+        if not isinstance(raw, dict):
+            self.problem(f"node #{index + 1}", "a node must be a JSON object")
+            return None
+        uid = _scalar_text(raw["id"]) if "id" in raw else None
+        text = _scalar_text(raw["text"]) if "text" in raw else None
+        node_type = _scalar_text(raw["type"]) if "type" in raw else None
+        kind = {ISTAR_GOAL: "goal", ISTAR_TASK: "task"}.get(node_type or "")
+        head = (text or "").split(":", 1)[0]
+        id_match = (_GOAL_ID if kind == "goal" else _TASK_ID).search(head) if kind and text is not None else None
+        node_id = id_match.group() if id_match else ""
+        if node_id:
+            where = f"{kind} {node_id}"
+        elif uid is not None:
+            where = f"node {uid}"
+        else:
+            where = f"node #{index + 1}"
+
+        ok = True  # False once a problem makes the node unreadable
+        missing = [k for k in ("id", "text", "type", "x", "y", "customProperties") if k not in raw]
+        if missing:
+            self.problem(where, "node is missing " + ", ".join(repr(k) for k in missing))
+            ok = False
+        for key, value in (("id", uid), ("text", text), ("type", node_type)):
+            if key in raw and value is None:
+                self.problem(where, f"node {key!r} must be a string")
+                ok = False
+        coordinates: dict[str, float] = {}
+        for axis in ("x", "y"):
+            if axis in raw:
+                number = _number(raw[axis])
+                if number is None:
+                    self.problem(where, f"node {axis!r} must be a number, not {json.dumps(raw[axis])}")
+                    ok = False
+                else:
+                    coordinates[axis] = number
+        props: dict[str, str] = {}
+        raw_props = raw.get("customProperties", {})
+        if not isinstance(raw_props, dict):
+            self.problem(where, "node 'customProperties' must be a JSON object")
+            ok = False
+        else:
+            for key, value in raw_props.items():
+                value_text = _scalar_text(value)
+                if value_text is None:
+                    self.problem(where, f"custom property {key} must be a string")
+                    ok = False
+                else:
+                    props[key] = value_text
+        if node_type is not None and kind is None:
+            self.problem(where, f"unsupported node type {node_type}: only {ISTAR_GOAL} and {ISTAR_TASK} are supported")
+            ok = False
+        if uid is None:
+            return None
+        # A draft is returned even for a broken node so that its links are not also reported as
+        # dangling; the model is only built when no problem was found.
+        fields: dict[str, Any] = {"text": text, "y": coordinates.get("y", 0.0)}
+        draft = _Draft(index, uid, node_id, kind or "", coordinates.get("x", 0.0), where, fields)
+        if not ok or text is None or kind is None:
+            return draft
+        if kind == "goal":
+            if self._read_goal_text(where, text, node_id):
+                fields["annotation"] = self._attempt(where, "", lambda: parse_node_text(text)[1])
+        else:
+            self._read_task_text(where, text, node_id, fields)
+        self._read_properties(where, node_id, text, props, fields)
+        return draft
+
+    def _read_goal_text(self, where: str, text: str, node_id: str) -> bool:
+        if not node_id:
+            self.problem(where, f"goal text must start with its id G<k> followed by ':' (text: {text})")
+            return False
+        try:
+            name, _ = parse_node_text(text)
+        except MissionError:
+            return True  # reported with the annotation
+        if name != node_id:
+            self.problem(where, f"the text before ':' must be exactly the goal id {node_id}, not {name}")
+            return False
+        return True
+
+    def _read_task_text(self, where: str, text: str, node_id: str, fields: dict[str, Any]) -> bool:
+        if not node_id or ":" not in text:
+            self.problem(where, f"task text must be 'AT<k>: <HDDLTaskName>' (text: {text})")
+            return False
+        name = _TASK_NAME.search(text.split(":", 1)[1])
+        if name is None:
+            self.problem(where, f"task text must name an HDDL abstract task after ':' (text: {text})")
+            return False
+        fields["task_name"] = name.group()
+        return True
+
+    def _read_properties(
+        self, where: str, node_id: str, text: str, props: dict[str, str], fields: dict[str, Any]
+    ) -> bool:
+        """Interpret every custom property (spec §4, §6–§8); False when one is invalid."""
+        before = len(self.problems)
+        for key in props:
+            if key not in KNOWN_PROPERTIES:
+                self.problem(where, f"Invalid property {key} in vertex {text}")
+
+        goal_type = props.get("GoalType", "Perform")
+        if goal_type not in GOAL_TYPES:
+            self.warn(where, f"Invalid goal type on node [{node_id}]: [{goal_type}]. Defaulting to Perform type.")
+        fields["goal_type"] = goal_type
+
+        for key, attr in (("Controls", "controls"), ("Monitors", "monitors")):
+            if key in props:
+                value = props[key]
+                decls = self._attempt(where, f"{key}: ", lambda: parse_var_decls(value))
+                fields[attr] = decls or ()
+
+        if "CreationCondition" in props:
+            fields["context"] = self._read_context(where, props["CreationCondition"])
+
+        if "AchieveCondition" in props:
+            achieve = props["AchieveCondition"]
+            fields["achieve_text"] = achieve
+            if "forAll" in achieve:
+                fields["forall"] = self._attempt(where, "AchieveCondition: ", lambda: parse_forall(achieve))
+            else:
+                fields["achieve_condition"] = self._attempt(
+                    where, "AchieveCondition: ", lambda: parse_condition(achieve)
+                )
+
+        # A Query goal without QueriedProperty fails like an empty one, as in the original.
+        if goal_type == "Query" or "QueriedProperty" in props:
+            queried = props.get("QueriedProperty", "")
+            fields["query"] = self._attempt(where, "QueriedProperty: ", lambda: parse_select(queried))
+
+        for key, attr in (("Group", "group"), ("Divisible", "divisible")):
+            value, recognised = _flag(props.get(key))
+            if not recognised:
+                self.warn(where, f"{key} value {props[key]!r} is neither True nor False; using True")
+            fields[attr] = value
+
+        if "Location" in props:
+            fields["location"] = props["Location"].strip() or None
+        if "Params" in props:
+            fields["params"] = parse_params(props["Params"])
+        robots = props.get("RobotNumber", "").strip()
+        if robots:
+            fields["robot_number"] = self._attempt(where, "", lambda: parse_robot_number(robots))
+        return len(self.problems) == before
+
+    def _read_context(self, where: str, value: str) -> Context | None:
+        """``CreationCondition`` (spec §6): kind by substring, text between the first '"' and the
+        last character of the value (which should be the closing '"')."""
+        lowered = value.lower()
+        kind = "trigger" if "trigger" in lowered else "condition" if "condition" in lowered else None
+        if kind is None:
+            if value.strip():
+                self.warn(where, f"CreationCondition {value!r} is neither a trigger nor a condition; ignored")
+            return None
+        quote = value.find('"')
+        inner = value[quote + 1 : len(value) - 1]
+        if quote == -1 or quote == len(value) - 1 or not value.endswith('"'):
+            self.warn(where, f'CreationCondition should read assertion {kind} "<text>"; read the text as {inner!r}')
+        if kind == "trigger":
+            return Context("trigger", inner)
+        condition = self._attempt(where, "CreationCondition: ", lambda: parse_condition(inner))
+        return Context("condition", inner, condition)
+
+    # -- links and tree -------------------------------------------------------------------------
+
+    def _read_link(self, index: int, raw: Any, by_uid: dict[str, int]) -> _Link | None:
+        if not isinstance(raw, dict):
+            self.problem(f"link #{index + 1}", "a link must be a JSON object")
+            return None
+        link_id = _scalar_text(raw.get("id")) if "id" in raw else None
+        where = f"link {link_id}" if link_id is not None else f"link #{index + 1}"
+        ends: dict[str, int] = {}
+        ok = True
+        for key in ("type", "source", "target"):
+            value = _scalar_text(raw[key]) if key in raw else None
+            if value is None:
+                self.problem(where, f"link is missing a string {key!r}")
+                ok = False
+            elif key != "type":
+                if value not in by_uid:
+                    self.problem(where, f"link {key} {value} is not a node of the goal model")
+                    ok = False
+                else:
+                    ends[key] = by_uid[value]
+        if not ok:
+            return None
+        if ends["source"] == ends["target"]:
+            self.problem(where, "link connects a node to itself")
+            return None
+        return _Link(link_id or f"#{index + 1}", str(raw["type"]), child=ends["source"], parent=ends["target"])
+
+    def _build(self, drafts: list[_Draft], links: list[_Link]) -> GoalModel:
+        """Child order, vertex order and DFS exactly as the original (spec §3)."""
+        # Links sorted by the child's x (stable, so ties keep file order).
+        links = sorted(links, key=lambda k: drafts[k.child].x)
+        order: list[int] = []
+        seen: set[int] = set()
+        for link in links:
+            for v in (link.parent, link.child):
+                if v not in seen:
+                    seen.add(v)
+                    order.append(v)
+        # Nodes in no link are not vertices of the original's graph; keep them, last.
+        order.extend(i for i in range(len(drafts)) if i not in seen)
+        rank = {v: r for r, v in enumerate(order)}
+
+        parents: dict[int, list[int]] = {}
+        out_edges: dict[int, list[int]] = {}
+        or_decomposed: set[int] = set()
+        for link in links:
+            parents.setdefault(link.child, []).append(link.parent)
+            out_edges.setdefault(link.parent, []).append(link.child)
+            if link.type == OR_REFINEMENT:
+                or_decomposed.add(link.parent)
+        for child, ps in parents.items():
+            if len(ps) > 1:
+                names = ", ".join(drafts[p].id for p in ps)
+                self.problem(drafts[child].where, f"node has more than one parent ({names})")
+        roots = [v for v in order if v not in parents]
+        if not roots:
+            self.problem("goal model", "no root: every node has a parent (the links form a cycle)")
+        self._raise_if_problems()
+        root = roots[0]
+
+        # Depth-first, children in sorted-link order, then (like boost's depth_first_search)
+        # every vertex not reached from the root, in vertex order.
+        dfs: list[int] = []
+        visited: set[int] = set()
+        for start in [root] + order:
+            if start in visited:
+                continue
+            if start != root:
+                self.warn(drafts[start].where, f"node is not reachable from the root {drafts[root].id}")
+            stack = [start]
+            while stack:
+                v = stack.pop()
+                if v in visited:
+                    continue
+                visited.add(v)
+                dfs.append(v)
+                stack.extend(reversed(out_edges.get(v, [])))
+
+        nodes: list[GMNode] = []
+        for v in order:
+            d = drafts[v]
+            children = sorted(out_edges.get(v, []), key=rank.__getitem__)
+            parent = parents.get(v)
+            nodes.append(
+                GMNode(
+                    uid=d.uid,
+                    id=d.id,
+                    kind=d.kind,
+                    x=d.x,
+                    children=tuple(drafts[c].id for c in children),
+                    parent=drafts[parent[0]].id if parent else None,
+                    or_decomposed=v in or_decomposed,
+                    **d.fields,
+                )
+            )
+        return GoalModel(
+            source=self.source,
+            nodes=tuple(nodes),
+            root=drafts[root].id,
+            dfs=tuple(drafts[v].id for v in dfs),
+            warnings=tuple(self.warnings),
+        )

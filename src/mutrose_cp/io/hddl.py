@@ -6,8 +6,16 @@ Syntax errors and static domain errors (undeclared predicates or subtasks, arity
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
+from importlib import resources
+from typing import Iterable
+
+from lark import Lark, Token, Tree
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+
+from ..errors import MissionError, Problem, located
 
 # ---------------------------------------------------------------------------------------------
 # Model
@@ -151,3 +159,584 @@ class Domain:
 
     def predicate_declarations(self, name: str) -> tuple[Declaration, ...]:
         return tuple(p for p in self.predicates if p.name == name)
+
+
+# ---------------------------------------------------------------------------------------------
+# Reader
+
+_RESERVED_NAMES = frozenset(
+    "define domain problem and or not imply forall exists when increase decrease assign typeof "
+    "sortof".split()
+)
+"""Keywords of hddl.md §1 that look like names. All but ``problem`` are terminals of the grammar
+(the basic lexer re-types them); ``problem`` is unused by a domain, so it is checked by hand."""
+
+_NATIVE_TYPES = ("object", "robot", "robotteam")
+_ALWAYS_ACCEPTED_IN_PRECONDITIONS = frozenset({"at", "hascapability"})
+_TERMINAL_DESCRIPTIONS = {
+    "NAME": "a name",
+    "VAR": "a variable",
+    "NUMBER": "a number",
+    "REQUIRE_NAME": "a requirement",
+    "$END": "end of file",
+}
+
+
+@lru_cache(maxsize=1)
+def _parser() -> Lark:
+    """The LALR parser, built once per process: building costs ~0.15 s, a parse a few ms."""
+    grammar = resources.files("mutrose_cp").joinpath("grammars/hddl.lark").read_text("utf-8")
+    return Lark(
+        grammar,
+        parser="lalr",
+        lexer="basic",
+        start="domain",
+        propagate_positions=True,
+        maybe_placeholders=True,
+    )
+
+
+def load_domain(path: str | os.PathLike[str]) -> Domain:
+    """Read and parse the HDDL domain file at ``path``; locations in errors use ``path`` as given."""
+    source = os.fspath(path)
+    try:
+        with open(source, encoding="utf-8") as handle:
+            text = handle.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise MissionError(Problem(located(source), f"cannot read the HDDL domain: {reason}")) from exc
+    return parse_domain(text, source)
+
+
+def parse_domain(text: str, source: str) -> Domain:
+    """Parse the HDDL domain ``text`` (``source`` names it in error locations) and check it.
+
+    A syntax error is reported alone (nothing after it can be trusted); otherwise every static
+    problem is collected and raised together in one :class:`MissionError`, sorted by position."""
+    try:
+        tree = _parser().parse(text)
+    except UnexpectedInput as exc:
+        raise MissionError(_syntax_problem(exc, text, source)) from None
+    return _DomainReader(source).read(tree)
+
+
+# --- syntax errors ----------------------------------------------------------------------------
+
+
+def _describe_terminal(name: str) -> str:
+    if name in _TERMINAL_DESCRIPTIONS:
+        return _TERMINAL_DESCRIPTIONS[name]
+    try:
+        pattern = _parser().get_terminal(name).pattern
+    except KeyError:
+        return name
+    return f"'{pattern.value}'"
+
+
+def _expected_phrase(terminals: Iterable[str]) -> str:
+    names = sorted({_describe_terminal(t) for t in terminals})
+    if not names:
+        return ""
+    if len(names) == 1:
+        return f"expected {names[0]}, "
+    return f"expected one of {', '.join(names)}, "
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def _end_of_text(text: str) -> tuple[int, int]:
+    line = text.count("\n") + 1
+    return line, len(text) - (text.rfind("\n") + 1) + 1
+
+
+def _innermost_unclosed_paren(text: str) -> tuple[int, int] | None:
+    """Position of the last ``(`` left open at the end of ``text`` (comments skipped)."""
+    stack: list[tuple[int, int]] = []
+    for line_no, line in enumerate(text.split("\n"), start=1):
+        for col, char in enumerate(line.split(";", 1)[0], start=1):
+            if char == "(":
+                stack.append((line_no, col))
+            elif char == ")" and stack:
+                stack.pop()
+    return stack[-1] if stack else None
+
+
+def _syntax_problem(exc: UnexpectedInput, text: str, source: str) -> Problem:
+    """Turn a lark error into ``file:line:col: syntax error: expected ..., found ...``."""
+    expected: set[str] = set()
+    if exc.interactive_parser is not None:
+        try:
+            expected = set(exc.interactive_parser.accepts())
+        except Exception:  # accepts() replays the parser; never let it hide the real error
+            expected = set()
+    if isinstance(exc, UnexpectedToken):
+        expected = expected or set(exc.expected)
+        token = exc.token
+        if token.type == "$END":
+            line, column = _end_of_text(text)
+            message = f"syntax error: {_expected_phrase(expected)}found end of file"
+            paren = _innermost_unclosed_paren(text)
+            if paren is not None and "_RP" in expected:
+                message += f" (the '(' at {paren[0]}:{paren[1]} is not closed)"
+            return Problem(located(source, line, column), message)
+        message = f"syntax error: {_expected_phrase(expected)}found '{token.value}'"
+        if "NAME" in expected and token.value in _RESERVED_NAMES:
+            message += f" ('{token.value}' is a reserved word and cannot be used as a name)"
+        return Problem(located(source, token.line, token.column), message)
+    if isinstance(exc, UnexpectedCharacters):
+        char = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else ""
+        message = f"syntax error: {_expected_phrase(expected)}found invalid character '{char}'"
+        return Problem(located(source, exc.line, exc.column), message)
+    line, column = getattr(exc, "line", None), getattr(exc, "column", None)  # UnexpectedEOF
+    return Problem(located(source, line, column), f"syntax error: {exc}")
+
+
+# --- tree reading and static checks -----------------------------------------------------------
+
+_Where = Token | Tree | tuple[int, int]
+
+
+@dataclass
+class _Body:
+    """What a precondition/effect is checked against: the owner's name, kind and variables."""
+
+    kind: str  # "action" | "method"
+    name: str
+    variables: frozenset[str]
+
+
+class _DomainReader:
+    """Builds the :class:`Domain` from the parse tree and collects every static problem.
+
+    Declarations are gathered first (sections may come in any order), then task, action and method
+    bodies are converted and checked against them."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self._problems: list[tuple[int, int, str]] = []
+        self._subtask_counter = 0
+        self.predicates: list[Declaration] = []
+        self.functions: list[Declaration] = []
+        self.capabilities: list[str] = []
+        self.constants: list[tuple[str, str]] = []
+        self._type_groups: list[tuple[list[str], str | None]] = []
+        self._mentioned_sorts: list[str] = []  # sorts used in declarations, first-mention order
+        self._known_types: set[str] = set()
+        self.tasks: dict[str, AbstractTask] = {}
+        self.actions: dict[str, Action] = {}
+
+    # ---- problems
+
+    def _error(self, where: _Where, message: str) -> None:
+        if isinstance(where, Token):
+            line, column = where.line or 0, where.column or 0
+        elif isinstance(where, Tree):
+            line, column = getattr(where.meta, "line", 0), getattr(where.meta, "column", 0)
+        else:
+            line, column = where
+        self._problems.append((line, column, message))
+
+    def _raise_if_problems(self) -> None:
+        if self._problems:
+            ordered = sorted(self._problems, key=lambda p: (p[0], p[1]))
+            raise MissionError(
+                [Problem(located(self.source, line, col), msg) for line, col, msg in ordered]
+            )
+
+    # ---- entry point
+
+    def read(self, tree: Tree) -> Domain:
+        name_token, *sections = tree.children
+        self._check_reserved_names(tree)
+        bodies: list[Tree] = []
+        for section in sections:
+            kind = section.data
+            if kind in ("task_def", "action_def", "method_def"):
+                bodies.append(section)
+            elif kind == "types":
+                self._read_types(section)
+            elif kind == "constants":
+                self._read_constants(section)
+            elif kind == "predicates":
+                self.predicates.extend(self._read_declaration(d) for d in section.children)
+            elif kind == "functions":
+                self.functions.extend(
+                    self._read_declaration(d) for d in section.children if d.data == "atomic_decl"
+                )
+            elif kind == "capabilities":
+                self.capabilities.extend(str(t) for t in section.children)
+            # requirements and rewards are ignored (hddl.md §2)
+        types = self._build_types()
+        self._known_types = {t for t, _ in types} | {p for _, p in types if p} | set(_NATIVE_TYPES)
+
+        task_trees = [b for b in bodies if b.data != "method_def"]
+        declared_at: dict[str, tuple[str, Token]] = {}
+        for body in task_trees:
+            self._read_task_or_action(body, declared_at)
+        methods: list[Method] = []
+        method_names: dict[str, Token] = {}
+        for body in bodies:
+            if body.data == "method_def":
+                method = self._read_method(body, method_names)
+                if method is not None:
+                    methods.append(method)
+        self._raise_if_problems()
+        return Domain(
+            name=str(name_token),
+            source=self.source,
+            types=types,
+            constants=tuple(self.constants),
+            predicates=tuple(self.predicates),
+            functions=tuple(self.functions),
+            capabilities=tuple(self.capabilities),
+            tasks=tuple(self.tasks.values()),
+            actions=tuple(self.actions.values()),
+            methods=tuple(methods),
+        )
+
+    def _check_reserved_names(self, tree: Tree) -> None:
+        # Every other reserved word is a terminal and already a syntax error where a name goes.
+        for token in tree.scan_values(
+            lambda v: isinstance(v, Token) and v.type == "NAME" and v.value in _RESERVED_NAMES
+        ):
+            self._error(token, f"'{token.value}' is a reserved word and cannot be used as a name")
+
+    # ---- declarations
+
+    def _mention_sort(self, sort: str) -> None:
+        if sort not in self._mentioned_sorts:
+            self._mentioned_sorts.append(sort)
+
+    def _read_types(self, section: Tree) -> None:
+        pending: list[str] = []
+        for item in section.children:
+            if isinstance(item, Token):
+                pending.append(item.value)
+                continue
+            minus, parent = item.children
+            if not pending:
+                self._error(minus, f"'- {parent}' is not preceded by any type name")
+                continue
+            self._type_groups.append((pending, parent.value))
+            self._mention_sort(parent.value)
+            pending = []
+        if pending:
+            self._type_groups.append((pending, None))
+
+    def _read_constants(self, section: Tree) -> None:
+        for group in section.children:
+            *names, _minus, sort = group.children
+            self._mention_sort(sort.value)
+            self.constants.extend((n.value, sort.value) for n in names)
+
+    def _read_declaration(self, decl: Tree) -> Declaration:
+        name, typed_vars = decl.children
+        parameters = tuple(Parameter(v.value, t.value) for v, t in self._typed_vars(typed_vars))
+        for parameter in parameters:
+            self._mention_sort(parameter.type)
+        return Declaration(name.value, parameters)
+
+    def _build_types(self) -> tuple[tuple[str, str | None], ...]:
+        """(type, parent) in declaration order, with the native sorts of hddl.md §2.1.
+
+        ``robot``/``robotteam`` join the first ``- object`` group (else they are parentless roots)
+        unless the domain declares them itself. Sorts only *mentioned* (undeclared parents, sorts
+        of predicate/function/constant declarations, which PANDA creates on the fly) follow as
+        parentless types so that every sort of the domain has an entry."""
+        groups = [(list(names), parent) for names, parent in self._type_groups]
+        declared = {t for names, _ in groups for t in names}
+        natives = [t for t in ("robot", "robotteam") if t not in declared]
+        object_group = next((g for g in groups if g[1] == "object"), None)
+        if object_group is not None:
+            object_group[0].extend(natives)
+        else:
+            groups.append((natives, None))
+        types: list[tuple[str, str | None]] = []
+        for names, parent in groups:
+            for name in names:
+                if (name, parent) not in types:
+                    types.append((name, parent))
+        known = {t for t, _ in types}
+        for sort in self._mentioned_sorts:
+            if sort not in known and sort != "object":
+                types.append((sort, None))
+                known.add(sort)
+        return tuple(types)
+
+    def _typed_vars(self, tree: Tree) -> list[tuple[Token, Token]]:
+        pairs: list[tuple[Token, Token]] = []
+        for group in tree.children:
+            *variables, _minus, sort = group.children
+            pairs.extend((v, sort) for v in variables)
+        return pairs
+
+    def _parameters(self, tree: Tree, owner: str) -> tuple[Parameter, ...]:
+        """Typed parameters of a task/action/method; checks sorts and duplicate variables."""
+        seen: set[str] = set()
+        parameters: list[Parameter] = []
+        for variable, sort in self._typed_vars(tree):
+            if variable.value in seen:
+                self._error(variable, f"parameter {variable.value} of {owner} is declared twice")
+            seen.add(variable.value)
+            if sort.value not in self._known_types:
+                self._error(sort, f"unknown type '{sort.value}' of parameter {variable.value} of {owner}")
+            parameters.append(Parameter(variable.value, sort.value))
+        return tuple(parameters)
+
+    # ---- abstract tasks and actions
+
+    def _read_task_or_action(self, tree: Tree, declared_at: dict[str, tuple[str, Token]]) -> None:
+        name, params, capabilities, precondition, effect, _reliability = tree.children
+        kind = "abstract task" if tree.data == "task_def" else "action"
+        owner = f"{kind} '{name.value}'"
+        if name.value in declared_at:
+            first_kind, first = declared_at[name.value]
+            self._error(
+                name,
+                f"duplicate {kind} '{name.value}': the name is already declared as {first_kind} "
+                f"at {first.line}:{first.column}",
+            )
+            return
+        declared_at[name.value] = (f"an {kind}", name)
+        parameters = self._parameters(params, owner)
+        if tree.data == "task_def":
+            # hddl.md §3: capabilities, precondition and effect of abstract tasks are ignored.
+            self.tasks[name.value] = AbstractTask(name.value, parameters, name.line, name.column)
+            return
+        body = _Body("action", name.value, frozenset(p.name for p in parameters))
+        preconditions = self._preconditions(precondition, body)
+        effects, numeric = self._effects(effect, body)
+        self.actions[name.value] = Action(
+            name=name.value,
+            parameters=parameters,
+            capabilities=tuple(t.value for t in capabilities.children) if capabilities else (),
+            preconditions=preconditions,
+            effects=effects,
+            numeric_effects=numeric,
+            line=name.line,
+            column=name.column,
+        )
+
+    # ---- methods
+
+    def _read_method(self, tree: Tree, method_names: dict[str, Token]) -> Method | None:
+        (name, params, task_call, precondition, effect, network, ordering,
+         _constraints, _causal_links) = tree.children
+        owner = f"method '{name.value}'"
+        if name.value in method_names:
+            first = method_names[name.value]
+            self._error(
+                name,
+                f"duplicate method '{name.value}' (already declared at {first.line}:{first.column})",
+            )
+        else:
+            method_names[name.value] = name
+        parameters = self._parameters(params.children[0], owner) if params else ()
+        body = _Body("method", name.value, frozenset(p.name for p in parameters))
+
+        task_name, *task_args = task_call.children
+        self._check_variables(task_args, body)
+        task = self.tasks.get(task_name.value)
+        if task is None:
+            what = "an action, not an abstract task" if task_name.value in self.actions else "not declared"
+            self._error(
+                task_name,
+                f"{owner} decomposes unknown abstract task '{task_name.value}' ({what})",
+            )
+        elif len(task_args) != len(task.parameters):
+            self._error(
+                task_name,
+                f"{owner} decomposes '{task_name.value}' with {_count(len(task_args), 'argument')} "
+                f"but the task declares {_count(len(task.parameters), 'parameter')}",
+            )
+
+        preconditions = self._preconditions(precondition, body)
+        effects, numeric = self._effects(effect, body)
+        subtasks, ordered = self._subtasks(network, body)
+        pairs = self._ordering(ordering, subtasks, ordered, owner)
+        if ordered:
+            pairs = tuple((a.id, b.id) for a, b in zip(subtasks, subtasks[1:]))
+        return Method(
+            name=name.value,
+            parameters=parameters,
+            task=task_name.value,
+            task_args=tuple(t.value for t in task_args),
+            preconditions=preconditions,
+            effects=effects,
+            numeric_effects=numeric,
+            subtasks=subtasks,
+            ordering=pairs,
+            ordered=ordered,
+            line=name.line,
+            column=name.column,
+        )
+
+    def _subtasks(self, network: Tree | None, body: _Body) -> tuple[tuple[Subtask, ...], bool]:
+        """The task network; an omitted network is an empty *ordered* one (hddl.md §5)."""
+        if network is None:
+            return (), True
+        keyword, defs = network.children
+        ordered = keyword.type in ("K_ORDERED_SUBTASKS", "K_ORDERED_TASKS")
+        subtasks: list[Subtask] = []
+        ids: set[str] = set()
+        for definition in defs.children:
+            if definition.data == "subtask_named":
+                id_token, callee, *args = definition.children
+                subtask_id = id_token.value
+                if subtask_id in ids:
+                    self._error(id_token, f"duplicate subtask id '{subtask_id}' in method '{body.name}'")
+            else:
+                id_token = None
+                callee, *args = definition.children
+                subtask_id = f"__t_id_{self._subtask_counter}"
+                self._subtask_counter += 1
+            ids.add(subtask_id)
+            self._check_variables(args, body)
+            self._check_callee(callee, len(args), body)
+            subtasks.append(Subtask(subtask_id, callee.value, tuple(a.value for a in args)))
+        return tuple(subtasks), ordered
+
+    def _check_callee(self, callee: Token, arity: int, body: _Body) -> None:
+        declared = self.tasks.get(callee.value) or self.actions.get(callee.value)
+        if declared is None:
+            self._error(
+                callee,
+                f"There is no declaration of the subtask {callee.value} (method '{body.name}'): "
+                "it is neither an abstract task nor an action",
+            )
+        elif arity > len(declared.parameters):
+            self._error(
+                callee,
+                f"subtask {callee.value} in method '{body.name}' is given {_count(arity, 'argument')} "
+                f"but declares only {_count(len(declared.parameters), 'parameter')}",
+            )
+
+    def _ordering(
+        self, ordering: Tree | None, subtasks: tuple[Subtask, ...], ordered: bool, owner: str
+    ) -> tuple[tuple[str, str], ...]:
+        if ordering is None:
+            return ()
+        keyword, defs = ordering.children
+        pairs = [tuple(pair.children) for pair in defs.children]
+        if ordered and pairs:
+            self._error(
+                keyword,
+                f"{owner} has an explicit {keyword.value} but its subtasks are already totally "
+                "ordered (:ordered-subtasks / :ordered-tasks or no network)",
+            )
+            return ()
+        ids = {s.id for s in subtasks}
+        for pair in pairs:
+            for token in pair:
+                if token.value not in ids:
+                    self._error(token, f"ordering of {owner} refers to unknown subtask id '{token.value}'")
+        return tuple((a.value, b.value) for a, b in pairs)
+
+    # ---- preconditions and effects
+
+    def _check_variables(self, terms: Iterable[Token], body: _Body) -> None:
+        for term in terms:
+            if term.type == "VAR" and term.value not in body.variables:
+                self._error(term, f"variable {term.value} is not a parameter of {body.kind} '{body.name}'")
+
+    def _check_symbol(
+        self, name: Token, arity: int, declarations: list[Declaration], what: str, body: _Body, clause: str
+    ) -> None:
+        matching = [d for d in declarations if d.name == name.value]
+        if not matching:
+            self._error(
+                name, f"undeclared {what} '{name.value}' in the {clause} of {body.kind} '{body.name}'"
+            )
+            return
+        arities = sorted({len(d.parameters) for d in matching})
+        if arity not in arities:
+            declared = " or ".join(str(a) for a in arities)
+            self._error(
+                name,
+                f"{what} '{name.value}' is used with {_count(arity, 'argument')} in {body.kind} "
+                f"'{body.name}' but is declared with {declared}",
+            )
+
+    def _preconditions(self, clause: Tree | None, body: _Body) -> tuple[Condition, ...]:
+        conditions: list[Condition] = []
+        if clause is not None:
+            self._gd(clause.children[0], body, False, conditions)
+        return tuple(conditions)
+
+    def _gd(self, gd: Tree, body: _Body, negated: bool, out: list[Condition]) -> None:
+        kind = gd.data
+        if kind == "empty":
+            return
+        if kind == "gd_and":
+            if negated and gd.children:
+                self._error(gd, "a negated conjunction (not (and ...)) is not supported by the decomposer")
+                return
+            for child in gd.children:
+                self._gd(child, body, negated, out)
+        elif kind == "gd_not":
+            self._gd(gd.children[0], body, not negated, out)
+        elif kind == "atom":
+            predicate, *args = gd.children
+            self._check_variables(args, body)
+            if predicate.value not in _ALWAYS_ACCEPTED_IN_PRECONDITIONS:
+                self._check_symbol(predicate, len(args), self.predicates, "predicate", body, "precondition")
+            out.append(Literal(predicate.value, tuple(a.value for a in args), not negated))
+        elif kind == "comparison":
+            op, head, number = gd.children
+            function, *args = head.children
+            self._check_variables(args, body)
+            self._check_symbol(function, len(args), self.functions, "function", body, "precondition")
+            value: int | float = float(number.value) if "." in number.value else int(number.value)
+            out.append(Comparison(function.value, tuple(a.value for a in args), op.value, value, negated))
+        elif kind == "equality":
+            # (= ?x ?y) codesignation constraints are ignored by the decomposer (hddl.md §4.1).
+            self._check_variables(gd.children, body)
+        elif kind == "gd_unsupported":
+            keyword = gd.children[0]
+            self._error(keyword, f"'{keyword.value}' is not supported by the decomposer")
+        else:  # pragma: no cover - the grammar produces no other gd node
+            raise AssertionError(kind)
+
+    def _effects(
+        self, clause: Tree | None, body: _Body
+    ) -> tuple[tuple[Literal, ...], tuple[NumericEffect, ...]]:
+        literals: list[Literal] = []
+        numeric: list[NumericEffect] = []
+        if clause is not None:
+            self._effect(clause.children[0], body, literals, numeric)
+        return tuple(literals), tuple(numeric)
+
+    def _effect(self, effect: Tree, body: _Body, literals: list[Literal], numeric: list[NumericEffect]) -> None:
+        kind = effect.data
+        if kind == "empty":
+            return
+        if kind == "eff_and":
+            for child in effect.children:
+                self._effect(child, body, literals, numeric)
+        elif kind in ("atom", "eff_not"):
+            atom = effect if kind == "atom" else effect.children[0]
+            predicate, *args = atom.children
+            self._check_variables(args, body)
+            self._check_symbol(predicate, len(args), self.predicates, "predicate", body, "effect")
+            literals.append(Literal(predicate.value, tuple(a.value for a in args), kind == "atom"))
+        elif kind == "numeric_effect":
+            op, head, amount = effect.children
+            function, *args = head.children
+            self._check_variables(args, body)
+            self._check_symbol(function, len(args), self.functions, "function", body, "effect")
+            if isinstance(amount, Tree):
+                self._error(amount, f"the amount of {op.value} must be an integer, found a function term")
+            elif "." in amount.value:
+                # The original parses a decimal amount as a reward object and crashes (hddl.md §4.2).
+                self._error(amount, f"the amount of {op.value} must be an integer, found {amount.value}")
+            else:
+                numeric.append(
+                    NumericEffect(op.value, function.value, tuple(a.value for a in args), int(amount.value))
+                )
+        elif kind == "eff_unsupported":
+            keyword = effect.children[0]
+            self._error(keyword, f"'{keyword.value}' effects are not supported by the decomposer")
+        else:  # pragma: no cover - the grammar produces no other effect node
+            raise AssertionError(kind)

@@ -1,10 +1,187 @@
 """World knowledge reader (spec ``config-and-knowledge.md`` §5) with a hardened lxml parser:
-no entity expansion, no DTD loading, no network, lenient end tags as the original accepts."""
+no entity expansion, no DTD loading, no network, lenient end tags as the original accepts.
+
+The original reads the knowledge with Boost.PropertyTree (rapidxml), which does not validate
+closing-tag names and whose record values are strings taken verbatim.  This module reproduces
+that reading on top of lxml and offers the small value parsers (boolean, number, list) the
+original applies to field texts, plus indexes by tag / id / field so that queries evaluated
+thousands of times (one per ``forAll`` iteration) do not rescan the whole document.
+"""
 from __future__ import annotations
 
+import os
+import re
 from dataclasses import dataclass
+from functools import cached_property
+from typing import Iterator
 
 from lxml import etree
+
+from ..errors import MissionError, Problem, located
+
+# libxml2 errors that the original's reader (rapidxml) does not report either: a closing tag
+# whose name differs from the open element (libxml2's recovery pops the innermost element, the
+# same as rapidxml) and extra content after the first top-level element (only the first one is
+# read).  Every other well-formedness error is a real error of the input.
+TOLERATED_XML_ERRORS = frozenset({"ERR_TAG_NAME_MISMATCH", "ERR_DOCUMENT_END"})
+
+_XML_WHITESPACE = " \t\r\n"
+_CPP_SPACE = " \t\n\v\f\r"  # what ``istream >>`` skips
+_LIST_SEPARATORS = re.compile(r"[,\s]+")
+_INT_PREFIX = re.compile(r"[+-]?\d+")
+_FLOAT_PREFIX = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+# ---------------------------------------------------------------------------------------------
+# Hardened, tolerant XML parsing (shared with the XML configuration reader)
+
+
+def _hardened_parser() -> etree.XMLParser:
+    """A fresh parser per document: error logs are per parser, and the settings make entity
+    expansion, DTD loading and network access impossible (billion laughs, XXE)."""
+    return etree.XMLParser(
+        recover=True,
+        resolve_entities=False,
+        no_network=True,
+        load_dtd=False,
+        huge_tree=False,
+        remove_blank_text=False,
+    )
+
+
+def _line_of(data: bytes, needle: bytes) -> int:
+    pos = data.find(needle)
+    return data.count(b"\n", 0, pos) + 1 if pos >= 0 else 1
+
+
+_XML_DECL_ENCODING = re.compile(r"""^(\ufeff?\s*<\?xml[^>]*?encoding\s*=\s*)(["'])[^"']*\2""")
+
+
+def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Element:
+    """Parse ``data`` like the original's lenient reader and return the first top-level element.
+
+    Mismatched end tags close the innermost open element and content after the first top-level
+    element is ignored.  A DOCTYPE (and therefore any entity declaration) is rejected before
+    anything could be expanded; other syntax errors are reported at ``file:line:col``.
+    ``what`` names the document in messages (``world knowledge``, ``configuration``).
+    """
+    if isinstance(data, str):
+        # the text is already decoded: re-encode as UTF-8 and make the declaration say so
+        data = _XML_DECL_ENCODING.sub(r"\1\2UTF-8\2", data, count=1).encode("utf-8")
+    parser = _hardened_parser()
+    try:
+        root = etree.fromstring(data, parser)
+    except etree.XMLSyntaxError as exc:
+        line, col = (exc.position if exc.position else (None, None))
+        raise MissionError(located(source, line, col), f"XML syntax error in {what}: {exc.msg}") from None
+    if root is not None:
+        info = root.getroottree().docinfo
+        if info.internalDTD is not None or info.doctype:
+            raise MissionError(
+                located(source, _line_of(data, b"<!DOCTYPE")),
+                f"DTD and entity declarations are not allowed in {what}",
+            )
+    errors = [e for e in parser.error_log if e.type_name not in TOLERATED_XML_ERRORS]
+    if errors or root is None:
+        if not errors:
+            raise MissionError(source, f"XML syntax error in {what}: the document has no root element")
+        raise MissionError(
+            [Problem(located(source, e.line, e.column), f"XML syntax error in {what}: {e.message}") for e in errors]
+        )
+    return root
+
+
+def read_bytes(path: str | os.PathLike[str], what: str) -> bytes:
+    """Read a whole input file; a missing/unreadable file is a located MissionError."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except OSError as exc:
+        raise MissionError(os.fspath(path), f"cannot read {what} file: {exc.strerror or exc}") from None
+
+
+# ---------------------------------------------------------------------------------------------
+# Value helpers (C++ stream semantics of the original)
+
+
+def is_element(node: object) -> bool:
+    """True for real elements (comments and processing instructions have a non-string tag)."""
+    return isinstance(getattr(node, "tag", None), str)
+
+
+def element_children(el: etree._Element) -> Iterator[etree._Element]:
+    """Element children in document order, skipping comments and PIs (the original stores them
+    as pseudo-children that never match a type name)."""
+    return el.iterchildren(tag=etree.Element)
+
+
+def text_of(el: etree._Element) -> str:
+    """The element's data as PropertyTree sees it: all directly contained text pieces,
+    concatenated, where a piece consisting only of XML whitespace is dropped (rapidxml skips
+    whitespace before a tag).  Non-blank pieces are verbatim, including their blanks."""
+    if len(el) == 0:
+        t = el.text
+        return t if t and t.strip(_XML_WHITESPACE) else ""
+    pieces = [el.text] + [c.tail for c in el]
+    return "".join(p for p in pieces if p and p.strip(_XML_WHITESPACE))
+
+
+def child(el: etree._Element, tag: str) -> etree._Element | None:
+    """First element child with ``tag`` (PropertyTree ``get_child`` returns the first)."""
+    if not tag:
+        return None
+    return next(el.iterchildren(tag=tag), None)
+
+
+def field_text(el: etree._Element, name: str) -> str | None:
+    """Text of the first child ``name``; None when the field is missing."""
+    c = child(el, name)
+    return None if c is None else text_of(c)
+
+
+def record_id(el: etree._Element, unique_id: str = "name") -> str | None:
+    """The record's unique id (text of its first ``unique_id`` child), None if it has none."""
+    return field_text(el, unique_id)
+
+
+def split_list(text: str) -> list[str]:
+    """Split a multi-valued leaf: commas (HEAD) *and* whitespace (older builds, used for the
+    reference VSM data) separate values; empty pieces are dropped."""
+    return [p for p in _LIST_SEPARATORS.split(text) if p]
+
+
+def parse_bool(text: str) -> bool:
+    """``istringstream >> boolalpha`` on the lower-cased text: blanks skipped, then the word
+    ``true`` (a prefix suffices: the stream stops after it) is true; anything else false."""
+    return text.lstrip(_CPP_SPACE).lower().startswith("true")
+
+
+def parse_number(text: str) -> int | float:
+    """Float if the text contains ``.``, else int; like ``istream >>``: leading blanks skipped,
+    the longest numeric prefix read, trailing garbage ignored, a non-number gives 0."""
+    s = text.lstrip(_CPP_SPACE)
+    if "." in text:
+        m = _FLOAT_PREFIX.match(s)
+        return float(m.group()) if m else 0.0
+    m = _INT_PREFIX.match(s)
+    return int(m.group()) if m else 0
+
+
+def base_type(ocl_type: str) -> str:
+    """``Sequence(Room)`` -> ``Room``; plain types unchanged."""
+    lp = ocl_type.find("(")
+    if lp >= 0 and ocl_type.endswith(")"):
+        return ocl_type[lp + 1 : -1].strip()
+    return ocl_type
+
+
+def is_collection_type(ocl_type: str) -> bool:
+    """Collection OCL types are written ``Kind(Base)``, e.g. ``Sequence(Room)``."""
+    return "(" in ocl_type and ocl_type.endswith(")")
+
+
+# ---------------------------------------------------------------------------------------------
+# The knowledge
 
 
 @dataclass(frozen=True)
@@ -12,3 +189,97 @@ class WorldKnowledge:
     source: str
     root: etree._Element  # the xml_root element; its element children are the records
     unique_id: str = "name"
+
+    # -- records ------------------------------------------------------------------------------
+
+    @cached_property
+    def records(self) -> tuple[etree._Element, ...]:
+        """Top-level records (element children of the root) in document order."""
+        return tuple(element_children(self.root))
+
+    @cached_property
+    def _by_tag(self) -> dict[str, tuple[etree._Element, ...]]:
+        groups: dict[str, list[etree._Element]] = {}
+        for r in self.records:
+            groups.setdefault(r.tag, []).append(r)
+        return {t: tuple(rs) for t, rs in groups.items()}
+
+    def records_of(self, tag: str) -> tuple[etree._Element, ...]:
+        """Top-level records with ``tag`` in document order (same tuple object on every call,
+        so callers may recognise the full candidate list)."""
+        return self._by_tag.get(tag, ())
+
+    @cached_property
+    def _by_tag_id(self) -> dict[tuple[str, str], etree._Element]:
+        index: dict[tuple[str, str], etree._Element] = {}
+        for r in self.records:
+            rid = self.record_id(r)
+            if rid is not None:
+                index.setdefault((r.tag, rid), r)
+        return index
+
+    def find_record(self, tag: str, rid: str) -> etree._Element | None:
+        """First top-level record with ``tag`` and unique id ``rid``."""
+        return self._by_tag_id.get((tag, rid))
+
+    @cached_property
+    def _field_indexes(self) -> dict[tuple[str, str], dict[str, list[int]]]:
+        return {}
+
+    def field_index(self, tag: str, name: str) -> dict[str, list[int]]:
+        """For top-level records of ``tag``: text of field ``name`` -> positions in
+        :meth:`records_of` (ascending).  Built once per (tag, field); lets ``x.b in ...``
+        select among thousands of records without a scan."""
+        key = (tag, name)
+        index = self._field_indexes.get(key)
+        if index is None:
+            index = {}
+            for pos, r in enumerate(self.records_of(tag)):
+                t = field_text(r, name)
+                if t is not None:
+                    index.setdefault(t, []).append(pos)
+            self._field_indexes[key] = index
+        return index
+
+    # -- per-record helpers --------------------------------------------------------------------
+
+    def record_id(self, el: etree._Element) -> str | None:
+        return record_id(el, self.unique_id)
+
+    @staticmethod
+    def field(el: etree._Element, name: str) -> etree._Element | None:
+        return child(el, name)
+
+    @staticmethod
+    def field_text(el: etree._Element, name: str) -> str | None:
+        return field_text(el, name)
+
+    @staticmethod
+    def text(el: etree._Element) -> str:
+        return text_of(el)
+
+
+def load_knowledge(
+    path: str | os.PathLike[str], xml_root: str | None, unique_id: str = "name"
+) -> WorldKnowledge:
+    """Read the world knowledge file and locate the record container.
+
+    ``xml_root`` is the tag of the container (the root itself or its first descendant with that
+    tag, pre-order); None uses the document root, as the original does after its warning.
+    """
+    source = os.fspath(path)
+    data = read_bytes(path, "world knowledge")
+    doc_root = parse_tolerant_xml(data, source, "world knowledge")
+    root: etree._Element | None
+    if xml_root is None:
+        root = doc_root
+    elif doc_root.tag == xml_root:
+        root = doc_root
+    else:
+        root = next(doc_root.iterdescendants(tag=xml_root), None) if xml_root else None
+    if root is None:
+        raise MissionError(
+            located(source, doc_root.sourceline),
+            f"Root element [{xml_root}] (world_db.xml_root) was not found in world knowledge",
+        )
+    return WorldKnowledge(source=source, root=root, unique_id=unique_id or "name")

@@ -1,0 +1,183 @@
+"""The ``mutrose-cp`` command line: ``check``, ``decompose`` (and friends).
+
+Bad input ends with located messages on stderr and exit status 2; a mission without any valid
+decomposition exits with 3; nothing here prints a Python traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Sequence
+
+from . import __version__
+from .errors import MissionError
+from .mission import Mission, find_mission_files, resolve_config_path
+
+
+def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
+    """(hddl, gm, config, mission folder or None) from ``HDDL GM CONFIG`` or ``MISSION_DIR``."""
+    files = args.inputs
+    if len(files) == 1:
+        hddl, gm, cfg = find_mission_files(files[0], getattr(args, "config", None))
+        return hddl, gm, cfg, Path(files[0])
+    if len(files) == 3:
+        return Path(files[0]), Path(files[1]), Path(files[2]), None
+    raise MissionError("expected HDDL GM CONFIG, or a mission folder (hddl/ gm/ configuration/ knowledge/)")
+
+
+class _Progress:
+    """A progress line on an interactive stderr; silent when redirected or ``--quiet``."""
+
+    def __init__(self, enabled: bool, label: str) -> None:
+        self.enabled = enabled and sys.stderr.isatty()
+        self.label = label
+        self.last = 0.0
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        if now - self.last < 0.1 and done < total:
+            return
+        self.last = now
+        sys.stderr.write(f"\r{self.label}: {done}/{total}")
+        if done >= total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+def _summary(args: argparse.Namespace, data: dict, line: str) -> None:
+    if getattr(args, "json_summary", False):
+        print(json.dumps(data, sort_keys=True))
+    if not getattr(args, "quiet", False):
+        print(line, file=sys.stderr)
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    hddl, gm, cfg, _folder = _inputs(args)
+    start = time.perf_counter()
+    mission = Mission.load(hddl, gm, cfg)
+    # expanding the goal model against the world surfaces the run-time checks too
+    exp = mission.expansion
+    _ = mission.task_graph
+    _ = mission.constraints
+    for w in mission.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    elapsed = time.perf_counter() - start
+    _summary(args, {"command": "check", "valid": True, "task_instances": len(exp.instances),
+                    "seconds": round(elapsed, 3)},
+             f"ok: {hddl.name}, {gm.name}, {cfg.name} are valid ({len(exp.instances)} task instances, "
+             f"{elapsed:.2f} s)")
+    return 0
+
+
+def cmd_decompose(args: argparse.Namespace) -> int:
+    from .output import OutputModel, write_output
+
+    hddl, gm, cfg, folder = _inputs(args)
+    start = time.perf_counter()
+    mission = Mission.load(hddl, gm, cfg)
+    for w in mission.warnings:
+        if not args.quiet:
+            print(f"warning: {w}", file=sys.stderr)
+    progress = _Progress(not args.quiet, "mission decompositions: tasks visited")
+    tg = mission.task_graph
+    constraints = mission.constraints
+    decompositions = mission.exploratory(progress)
+    if args.output:
+        out_path = Path(args.output)
+    elif folder is not None:
+        out_path = resolve_config_path(mission.config.output.file_path, cfg)
+        if not Path(mission.config.output.file_path).is_absolute():
+            out_path = folder / mission.config.output.file_path
+    else:
+        out_path = mission.output_path()
+    file_type = args.format or mission.config.output.file_type
+    model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state)
+    if args.ihtn:
+        from .ihtn import write_ihtns
+
+        n_files = write_ihtns(model, Path(args.ihtn))
+    else:
+        n_files = 0
+        write_output(model, out_path, file_type)
+    elapsed = time.perf_counter() - start
+    kinds = Counter("FB" if c.kind == "FB" else c.kind for c in constraints)
+    data = {
+        "command": "decompose",
+        "algorithm": args.algorithm,
+        "task_instances": len(mission.expansion.instances),
+        "task_decompositions": len(tg.decompositions()),
+        "constraints": {k: kinds.get(k, 0) for k in ("SEQ", "FB", "EC")},
+        "mission_decompositions": len(decompositions),
+        "output": str(args.ihtn) if args.ihtn else str(out_path),
+        "ihtn_files": n_files,
+        "seconds": round(elapsed, 3),
+    }
+    where = f"{n_files} iHTN files in {args.ihtn}" if args.ihtn else str(out_path)
+    _summary(args, data,
+             f"decomposed: {data['task_instances']} task instances, {data['task_decompositions']} task "
+             f"decompositions, constraints SEQ {kinds.get('SEQ', 0)} FB {kinds.get('FB', 0)} EC "
+             f"{kinds.get('EC', 0)}, {len(decompositions)} valid mission decompositions -> {where} "
+             f"({elapsed:.2f} s)")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mutrose-cp",
+        description="Decompose MutRoSe multi-robot missions (goal model + HDDL + configuration + world).",
+    )
+    parser.add_argument("--version", action="version", version=f"mutrose-cp {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    def common(p: argparse.ArgumentParser) -> None:
+        p.add_argument("inputs", nargs="+", metavar="INPUT",
+                       help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
+        p.add_argument("--config", help="in a mission folder with several configurations, the one to use")
+        p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
+        p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
+
+    p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
+    common(p)
+    p.set_defaults(func=cmd_check)
+
+    p = sub.add_parser("decompose", help="decompose the mission and write the output file")
+    common(p)
+    p.add_argument("-o", "--output", help="output file (overrides the configuration's output.file_path)")
+    p.add_argument("--format", choices=("json", "xml"), help="output format (default: the configuration's)")
+    p.add_argument("--algorithm", choices=("exploratory",), default="exploratory",
+                   help="decomposition algorithm")
+    p.add_argument("--ihtn", metavar="DIR", help="write one iHTN file per ordering of each valid decomposition "
+                                                 "into DIR instead of the output file")
+    p.set_defaults(func=cmd_decompose)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "command", None):
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        return args.func(args)
+    except MissionError as err:
+        for problem in err.problems:
+            print(f"error: {problem}", file=sys.stderr)
+        if len(err.problems) > 1:
+            print(f"{len(err.problems)} problems found", file=sys.stderr)
+        return err.exit_code
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    except RecursionError:
+        print("error: the mission is nested too deeply to process", file=sys.stderr)
+        return 2
+    except OSError as err:
+        print(f"error: {err.filename or ''}: {err.strerror or err}", file=sys.stderr)
+        return 2

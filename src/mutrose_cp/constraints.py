@@ -1,0 +1,196 @@
+"""Mission constraints from the Task Graph (spec ``semantics.md`` §6).
+
+Sequential (SEQ) and fallback (FB) constraints come from the operator structure, transformed
+from task instances to their decompositions; parallel pairs become SEQ only where a context
+dependency orders them; execution constraints (EC) come from Group/Divisible.  Redundant
+SEQ/FB links are trimmed, and EC partners must agree on robot numbers.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .errors import MissionError
+from .taskgraph import AND, ATASK, CD, EC, OP, OR, TaskGraph
+
+SEQ, FB, PAR = "SEQ", "FB", "PAR"
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """``kind`` between two vertices (tasks while generating, decompositions when final)."""
+
+    kind: str  # SEQ | FB | EC (| PAR while generating)
+    first: int
+    second: int
+    group: bool = True
+    divisible: bool = True
+
+
+_Child = int | list[Constraint]  # a task vertex, or the constraint list of a subtree
+
+
+def _pairs(kind: str, x: _Child, y: _Child) -> list[tuple[int, int]]:
+    """Endpoint pairs generated between two children of a SEQ, FB or PAR node (§6.1)."""
+    out: list[tuple[int, int]] = []
+    if isinstance(x, int) and isinstance(y, int):
+        return [(x, y)]
+    if isinstance(x, int):
+        assert isinstance(y, list)
+        for c in y:
+            if kind == SEQ:
+                out += [(x, c.first)] if c.kind in (SEQ, FB) else [(x, c.first), (x, c.second)]
+            elif kind == FB:
+                out += [(x, c.first)] if c.kind == FB else [(x, c.first), (x, c.second)]
+            else:
+                out += [(x, c.first), (x, c.second)]
+        return out
+    if isinstance(y, int):
+        for c in x:
+            if kind == SEQ:
+                out += [(c.second, y)] if c.kind == SEQ else [(c.first, y), (c.second, y)]
+            elif kind == FB:
+                out += [(c.second, y)] if c.kind == FB else [(c.first, y), (c.second, y)]
+            else:
+                out += [(c.first, y), (c.second, y)]
+        return out
+    for l in x:
+        for r in y:
+            four = [(l.first, r.first), (l.first, r.second), (l.second, r.first), (l.second, r.second)]
+            if kind == SEQ:
+                if l.kind == SEQ:
+                    out += [(l.second, r.first)] if r.kind in (SEQ, FB) else [(l.second, r.first), (l.second, r.second)]
+                else:
+                    out += [(l.first, r.first), (l.second, r.first)] if r.kind in (SEQ, FB) else four
+            elif kind == FB:
+                if l.kind in (SEQ, PAR):
+                    out += four if r.kind in (SEQ, PAR) else [(l.first, r.first), (l.second, r.first)]
+                else:
+                    out += [(l.second, r.first), (l.second, r.second)] if r.kind in (SEQ, PAR) else [(l.second, r.first)]
+            else:
+                out += four
+    return out
+
+
+def _tree_constraints(tg: TaskGraph, v: int) -> list[Constraint]:
+    """The constraint list of the operator subtree rooted at ``v`` (§6.1)."""
+    vx = tg.vertices[v]
+    kind = {";": SEQ, "FALLBACK": FB}.get(vx.content, PAR)
+    children: list[_Child] = []
+    for u in tg.out(v, AND, OR):
+        ux = tg.vertices[u]
+        if ux.kind == ATASK:
+            children.append(u)
+        elif ux.kind == OP:
+            children.append(_tree_constraints(tg, u))
+    pairs: list[tuple[int, int]] = []
+    if kind == PAR:
+        combos = [(i, j) for i in range(len(children)) for j in range(i + 1, len(children))]
+    else:
+        combos = [(i, i + 1) for i in range(len(children) - 1)]
+    for i, j in combos:
+        pairs += _pairs(kind, children[i], children[j])
+    seen: set[tuple[int, int]] = set()
+    out: list[Constraint] = []
+    for p in pairs:
+        if p not in seen:
+            seen.add(p)
+            out.append(Constraint(kind, *p))
+    for c in children:
+        if isinstance(c, list):
+            for k in c:
+                if (k.first, k.second) not in seen:
+                    seen.add((k.first, k.second))
+                    out.append(k)
+    return out
+
+
+def _decompositions(tg: TaskGraph, task: int) -> list[int]:
+    return [d.index for d in tg.decompositions_of(task)]
+
+
+def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint]) -> list[Constraint]:
+    """§6.2: SEQ/FB over all decomposition pairs; PAR only where a CD edge orders the pair."""
+    out: list[Constraint] = []
+    for c in task_constraints:
+        if c.kind in (SEQ, FB):
+            out += [Constraint(c.kind, da, db) for da in _decompositions(tg, c.first) for db in _decompositions(tg, c.second)]
+        else:
+            for da in _decompositions(tg, c.first):
+                if c.second in tg.out(da, CD):
+                    out += [Constraint(SEQ, da, db) for db in _decompositions(tg, c.second)]
+    return out
+
+
+def _execution_constraints(tg: TaskGraph) -> list[Constraint]:
+    """§6.3: one EC per decomposition pair of every EC-linked task pair."""
+    out: list[Constraint] = []
+    done: set[tuple[int, int]] = set()
+    for s in (v.index for v in tg.tasks()):
+        for t in tg.out(s, EC):
+            if (t, s) in done:
+                continue
+            done.add((s, t))
+            flags = tg.graph.edges[s, t]
+            for ds in _decompositions(tg, s):
+                for dt in _decompositions(tg, t):
+                    out.append(Constraint(EC, ds, dt, flags.get("group", True), flags.get("divisible", True)))
+    return out
+
+
+def _trim(constraints: list[Constraint]) -> list[Constraint]:
+    """§6.4: drop SEQ implied through SEQ/FB and FB implied through FB (one pass)."""
+    seq_succ: dict[int, set[int]] = {}
+    fb_succ: dict[int, set[int]] = {}
+    seq_pred: dict[int, set[int]] = {}
+    fb_pred: dict[int, set[int]] = {}
+    for c in constraints:
+        if c.kind == SEQ:
+            seq_succ.setdefault(c.first, set()).add(c.second)
+            seq_pred.setdefault(c.second, set()).add(c.first)
+        elif c.kind == FB:
+            fb_succ.setdefault(c.first, set()).add(c.second)
+            fb_pred.setdefault(c.second, set()).add(c.first)
+    drop: set[int] = set()
+    for i, c in enumerate(constraints):
+        mids = seq_succ.get(c.first, set())
+        if c.kind == SEQ:
+            if mids & (seq_pred.get(c.second, set()) | fb_pred.get(c.second, set())):
+                drop.add(i)
+        elif c.kind == FB:
+            if fb_succ.get(c.first, set()) & fb_pred.get(c.second, set()):
+                drop.add(i)
+    return [c for i, c in enumerate(constraints) if i not in drop]
+
+
+def _check_robot_numbers(tg: TaskGraph, constraints: list[Constraint]) -> None:
+    """§6.5: execution-constrained decompositions need compatible robot numbers."""
+    for c in constraints:
+        if c.kind != EC:
+            continue
+        a = tg.vertices[c.first].instance
+        b = tg.vertices[c.second].instance
+        assert a is not None and b is not None
+        ra, rb = a.robot_number, b.robot_number
+        if ra.fixed and rb.fixed:
+            ok = ra.min == rb.min
+        else:
+            ok = ra.min <= rb.max and rb.min <= ra.max
+        if not ok:
+            raise MissionError(
+                f"Wrong robot number for execution constrained tasks [{tg.vertices[c.first].content}] and "
+                f"[{tg.vertices[c.second].content}]: they share robots, so their RobotNumber values must overlap"
+            )
+
+
+def generate_constraints(tg: TaskGraph) -> list[Constraint]:
+    """The final constraint list over decomposition vertices, in the original's order."""
+    out: list[Constraint] = []
+    if not tg.unique_branch:
+        root = tg.vertices[0]
+        if root.kind != OP:
+            raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
+        out = _to_decompositions(tg, _tree_constraints(tg, 0))
+    out += _execution_constraints(tg)
+    out = _trim(out)
+    _check_robot_numbers(tg, out)
+    return out

@@ -1,0 +1,240 @@
+"""Goal-model expansion against the world (spec ``semantics.md`` §3 and §4).
+
+One depth-first walk of the goal model, children left to right, does what the original does in
+two passes that visit nodes in the same order: it resolves query goals, iterates universal
+achieve goals (``forAll``), creates the abstract-task instances (ids ``AT1_2_1``, locations,
+parameter values, triggering events) and builds the runtime annotation tree over them.
+
+Annotation children are paired with the goal's children *positionally* (left to right), as the
+original does; nested operators of one annotation belong to the same goal and share its flags
+(the original mis-pairs them; see ``docs/deviations.md``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
+from .errors import MissionError
+from .io.config import Configuration
+from .io.expressions import Annotation, AnnotationLeaf, AnnotationOp
+from .io.goal_model import GMNode, GoalModel, RobotNumber
+from .io.hddl import Domain
+from .io.knowledge import WorldKnowledge
+from .query import Binding, run_select
+
+Value = str | tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class ParameterValue:
+    """One entry of an instance's variable mapping: an HDDL parameter and its value."""
+
+    hddl_param: str
+    value: Value
+    ocl_type: str
+    gm_var: str
+
+
+@dataclass(frozen=True)
+class TaskInstance:
+    """An abstract-task instance created from a goal-model task in one forAll context."""
+
+    id: str  # "AT1_2_1"
+    gm_task: str  # "AT1"
+    name: str  # HDDL abstract task
+    robot_number: RobotNumber
+    location: Value | None
+    parameters: tuple[ParameterValue, ...]
+    triggering_events: tuple[str, ...]
+
+    @property
+    def binding(self) -> dict[str, Value]:
+        """HDDL parameter -> value (the first entry wins)."""
+        out: dict[str, Value] = {}
+        for p in self.parameters:
+            out.setdefault(p.hddl_param, p.value)
+        return out
+
+
+@dataclass
+class Expansion:
+    instances: list[TaskInstance]
+    rat: RatNode
+    bindings: dict[str, Binding]  # global variable values after the walk (last forAll element)
+    forall_goals: dict[str, GMNode] = field(default_factory=dict)
+
+
+def record_id(record, unique_id: str) -> str:
+    """A world record's unique id (text of its ``unique_id`` child)."""
+    el = record.find(unique_id)
+    return (el.text or "") if el is not None else ""
+
+
+def infer_robot_number(domain: Domain, task_name: str) -> RobotNumber:
+    """Without ``RobotNumber``: the number of parameters typed ``robot`` or a direct subtype."""
+    task = domain.task_by_name[task_name]
+    robot_like = {t for t, p in domain.types if p == "robot"} | {"robot"}
+    n = sum(1 for p in task.parameters if p.type in robot_like)
+    return RobotNumber(n, n, True)
+
+
+class _Walker:
+    def __init__(self, gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge) -> None:
+        self.gm = gm
+        self.domain = domain
+        self.config = config
+        self.world = world
+        self.bindings: dict[str, Binding] = {}
+        self.counters: dict[int, int] = {}  # depth -> current forAll index (1-based)
+        self.events: dict[int, str] = {}  # depth -> trigger event text
+        self.instances: list[TaskInstance] = []
+        self.var_mapping: dict[str, list[tuple[str, str]]] = {}
+        for vm in config.var_mapping:
+            self.var_mapping.setdefault(vm.task_id, []).extend(vm.pairs)
+        self.declared_types: dict[str, str] = {}
+        for n in gm.nodes:
+            for d in n.controls:
+                self.declared_types.setdefault(d.name, d.type)
+
+    # -- helpers -----------------------------------------------------------------------------
+    def _enter(self, depth: int) -> None:
+        for d in [d for d in self.counters if d >= depth]:
+            del self.counters[d]
+        for d in [d for d in self.events if d >= depth]:
+            del self.events[d]
+
+    def _snapshot(self) -> dict[str, Binding]:
+        return dict(self.bindings)
+
+    def _where(self, node: GMNode) -> str:
+        return f"{self.gm.source}: {'goal' if node.kind == 'goal' else 'task'} {node.id}"
+
+    def _resolve_query(self, node: GMNode) -> None:
+        assert node.query is not None
+        if not node.controls:
+            raise MissionError(f"No controlled variable was declared for Query goal [{node.id}]", self._where(node))
+        records = run_select(node.query, self.world, self.bindings, node.id)
+        var = node.controls[0]
+        ids = tuple(record_id(r, self.world.unique_id) for r in records)
+        if var.is_collection:
+            self.bindings[var.name] = Binding(ids, var.type, tuple(records))
+        else:
+            self.bindings[var.name] = Binding(ids[0] if ids else "", var.type, tuple(records[:1]))
+
+    # -- the walk ----------------------------------------------------------------------------
+    def walk(self, node: GMNode, depth: int) -> RatNode:
+        self._enter(depth)
+        if node.kind == "task":
+            return self._task(node)
+        if node.goal_type == "Query" and node.query is not None:
+            self._resolve_query(node)
+            return RatNode(GOAL, node.id, node.id, var_maps=self._snapshot())
+        if node.context is not None and node.context.kind == "trigger":
+            self.events[depth] = node.context.text
+        if not node.children:
+            return RatNode(GOAL, node.id, node.id, var_maps=self._snapshot())
+        if node.forall is not None:
+            return self._forall(node, depth)
+        return self._expand(node, depth)
+
+    def _forall(self, node: GMNode, depth: int) -> RatNode:
+        fa = node.forall
+        assert fa is not None
+        iterated = self.bindings.get(fa.iterated)
+        if iterated is None or not isinstance(iterated.value, tuple):
+            raise MissionError(
+                f"forAll iterates over {fa.iterated}, which does not hold a collection "
+                "(declare it with a Sequence type and fill it with a Query goal first)",
+                self._where(node),
+            )
+        decl = next((d for d in node.controls if d.name == fa.iteration), None)
+        it_type = decl.type if decl is not None else ""
+        elements = list(zip(iterated.value, iterated.records))
+        if not elements:
+            return RatNode(GOAL, node.id, node.id, var_maps=self._snapshot())
+        self.counters[depth] = 1
+        copies: list[RatNode] = []
+        for i, (value, record) in enumerate(elements):
+            self.counters[depth] = i + 1
+            self.bindings[fa.iteration] = Binding(value, it_type, (record,))
+            copies.append(self._expand(node, depth))
+        if len(copies) == 1:
+            return copies[0]
+        return RatNode(OPERATOR, "#", "", copies, True, True, False, self._snapshot(), is_forall_dummy=True)
+
+    def _expand(self, node: GMNode, depth: int) -> RatNode:
+        """The operator structure of a goal with children, its leaves paired left to right."""
+        children = [self.gm.node(c) for c in node.children]
+        snapshot = self._snapshot()
+        if len(children) == 1:
+            rat = RatNode(MEANSEND, node.id, node.id, [], node.group, node.divisible, node.or_decomposed, snapshot)
+            rat.children.append(self.walk(children[0], depth + 1))
+            return rat
+        annotation: Annotation = node.annotation if isinstance(node.annotation, AnnotationOp) else AnnotationOp(
+            "#", tuple(AnnotationLeaf(c.id) for c in children)
+        )
+        if node.or_decomposed and annotation.op in (";", "FALLBACK"):
+            kind = "sequential" if annotation.op == ";" else "fallback"
+            raise MissionError(f"OR decomposed goal cannot have {kind} runtime annotations", self._where(node))
+        queue = list(children)
+
+        def build(a: Annotation, inner: bool) -> RatNode:
+            if isinstance(a, AnnotationLeaf):
+                if not queue:
+                    raise MissionError(
+                        f"runtime annotation names more children than the goal has ({a.name})", self._where(node)
+                    )
+                return self.walk(queue.pop(0), depth + 1)
+            op = RatNode(OPERATOR, a.op, node.id, [], node.group, node.divisible, node.or_decomposed, snapshot,
+                         inner=inner)
+            for c in a.children:
+                op.children.append(build(c, True))
+            return op
+
+        return build(annotation, False)
+
+    def _task(self, node: GMNode) -> RatNode:
+        name = node.task_name or ""
+        if name not in self.domain.task_by_name:
+            raise MissionError(f"Could not find AT [{name}] in HDDL Domain definition.", self._where(node))
+        suffix = "".join(f"_{self.counters[d]}" for d in sorted(self.counters)) or "_1"
+        inst_id = f"{node.id}{suffix}"
+        robots = node.robot_number or infer_robot_number(self.domain, name)
+        location: Value | None = None
+        mapping = self.var_mapping.get(node.id, [])
+        params: list[ParameterValue] = []
+        variables: list[str] = []
+        if node.location:
+            b = self.bindings.get(node.location)
+            if b is not None:
+                location = b.value
+                variables.append(node.location)
+        for p in node.params:
+            if p not in self.bindings:
+                raise MissionError(f"Could not find value for parameter [{p}] for task [{name}]", self._where(node))
+            variables.append(p)
+        for var in variables:
+            b = self.bindings[var]
+            for gm_var, hddl_var in mapping:
+                if gm_var == var:
+                    params.append(ParameterValue(hddl_var, b.value, b.type, var))
+        parent = self.gm.node(node.parent) if node.parent else None
+        sequential = (
+            parent is not None
+            and isinstance(parent.annotation, AnnotationOp)
+            and parent.annotation.op == ";"
+            and len(parent.children) > 1
+        )
+        events = () if sequential else tuple(self.events[d] for d in sorted(self.events))
+        inst = TaskInstance(inst_id, node.id, name, robots, location, tuple(params), events)
+        self.instances.append(inst)
+        return RatNode(TASK, inst_id, node.id, var_maps=self._snapshot())
+
+
+def expand(gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge) -> Expansion:
+    """Expand the goal model against the world: task instances and the runtime annotation tree."""
+    walker = _Walker(gm, domain, config, world)
+    rat = walker.walk(gm.node(gm.root), 0)
+    forall = {n.id: n for n in gm.nodes if n.forall is not None}
+    return Expansion(walker.instances, rat, walker.bindings, forall)

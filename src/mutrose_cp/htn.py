@@ -1,0 +1,499 @@
+"""HTN decomposition of abstract tasks (spec ``semantics.md`` §2).
+
+For every abstract task of the domain we build its task decomposition graph (TDG) and list its
+*decomposition paths*: the sequences of primitive steps that one choice of methods and one
+linearisation of each partial order yields, checked against a symbolic world state in which
+unknown facts are assumed.  Paths are expressed in the root task's parameter names; their
+position in the list is the decomposition number ``|n`` shared by every instance of the task.
+
+The module also grounds a path for one task instance (§2.5): which preconditions and effects
+the decomposition has once the instance's variables are bound.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Iterator, Mapping, Sequence
+
+from .errors import MissionError
+from .io.hddl import Action, Comparison, Domain, Literal, Method, NumericEffect
+
+PSEUDO_PREFIX = "__method_precondition_"
+MAX_RECURSION = 64  # recursive methods must be guarded by a numeric function
+
+
+# ---------------------------------------------------------------------------------------------
+# Decomposition paths
+
+
+@dataclass(frozen=True)
+class Step:
+    """A primitive step of a path, renamed to the root task's parameter names."""
+
+    name: str
+    args: tuple[str, ...]
+    preconditions: tuple[Literal | Comparison, ...]
+    effects: tuple[Literal, ...]
+    numeric_effects: tuple[NumericEffect, ...]
+    capabilities: tuple[str, ...]
+    pseudo: bool = False  # a method-precondition pseudo-action (never printed)
+
+
+@dataclass(frozen=True)
+class TreeNode:
+    """A node of the complete HTN path (for iHTN export): task, method or action."""
+
+    kind: str  # "task" | "method" | "action"
+    name: str
+    args: tuple[str, ...]  # renamed declared parameters
+    children: tuple["TreeNode", ...] = ()
+
+
+@dataclass(frozen=True)
+class Path:
+    """One decomposition path of an abstract task."""
+
+    steps: tuple[Step, ...]
+    tree: TreeNode  # the root task node with its chosen method subtree
+    needs_expansion: bool = False
+
+    @property
+    def actions(self) -> tuple[Step, ...]:
+        return tuple(s for s in self.steps if not s.pseudo)
+
+
+# ---------------------------------------------------------------------------------------------
+# Task decomposition graph
+
+
+@dataclass
+class _Vertex:
+    id: int
+    kind: str  # "task" | "method" | "primitive"
+    name: str
+    parent: int | None
+    method: Method | None = None
+    action: Action | None = None
+    # method vertices: children in plan-step order, with the plan step's arguments and id
+    children: list[tuple[int, tuple[str, ...], str]] = field(default_factory=list)
+
+
+def _pseudo_action(method: Method) -> Action | None:
+    """Method preconditions/effects become a primitive step executed first (hddl.md §5.1)."""
+    if not (method.preconditions or method.effects or method.numeric_effects):
+        return None
+    used: set[str] = set()
+    for c in (*method.preconditions, *method.effects, *method.numeric_effects):
+        used.update(a for a in c.args if a.startswith("?"))
+    params = tuple(p for p in method.parameters if p.name in used)
+    return Action(
+        name=PSEUDO_PREFIX + method.name,
+        parameters=params,
+        preconditions=method.preconditions,
+        effects=method.effects,
+        numeric_effects=method.numeric_effects,
+    )
+
+
+class _TDG:
+    """Task decomposition graph of one abstract task (§2.1)."""
+
+    def __init__(self, domain: Domain, root_task: str) -> None:
+        self.domain = domain
+        self.vertices: list[_Vertex] = []
+        self.root = self._new("task", root_task, None)
+        self._add_task(self.root)
+
+    def _new(self, kind: str, name: str, parent: int | None, **kw) -> _Vertex:
+        v = _Vertex(len(self.vertices), kind, name, parent, **kw)
+        self.vertices.append(v)
+        return v
+
+    def _ancestor_task(self, vertex: _Vertex, name: str) -> _Vertex | None:
+        cur: int | None = vertex.id
+        while cur is not None:
+            v = self.vertices[cur]
+            if v.kind == "task" and v.name == name:
+                return v
+            cur = v.parent
+        return None
+
+    def _add_task(self, task_vertex: _Vertex) -> None:
+        domain = self.domain
+        for method in domain.methods_of(task_vertex.name):
+            m = self._new("method", method.name, task_vertex.id, method=method)
+            for step in method.subtasks:
+                if step.task in domain.task_by_name:
+                    ancestor = self._ancestor_task(m, step.task)
+                    if ancestor is not None:  # recursion: edge back to the ancestor
+                        m.children.append((ancestor.id, step.args, step.id))
+                        continue
+                    a = self._new("task", step.task, m.id)
+                    m.children.append((a.id, step.args, step.id))
+                    self._add_task(a)
+                else:
+                    action = domain.action_by_name[step.task]
+                    p = self._new("primitive", action.name, m.id, action=action)
+                    m.children.append((p.id, step.args, step.id))
+            pseudo = _pseudo_action(method)
+            if pseudo is not None:
+                p = self._new("primitive", pseudo.name, m.id, action=pseudo)
+                m.children.append((p.id, tuple(q.name for q in pseudo.parameters), "mprec"))
+
+    def orderings(self, m: _Vertex) -> list[list[int]]:
+        """All linear extensions of the method's partial order, as child positions (§2.3).
+
+        At each position the remaining children are tried in ascending vertex id order."""
+        method = m.method
+        assert method is not None
+        ids = [c[2] for c in m.children]
+        pos = {sid: i for i, sid in enumerate(ids)}
+        before: dict[int, set[int]] = {i: set() for i in range(len(ids))}
+        for a, b in method.ordering:
+            before[pos[b]].add(pos[a])
+        if "mprec" in pos:
+            mp = pos["mprec"]
+            for i in range(len(ids)):
+                if i != mp:
+                    before[i].add(mp)
+        order_key = sorted(range(len(ids)), key=lambda i: (m.children[i][0], i))
+        result: list[list[int]] = []
+
+        def extend(prefix: list[int], placed: set[int]) -> None:
+            if len(prefix) == len(ids):
+                result.append(list(prefix))
+                return
+            for i in order_key:
+                if i not in placed and before[i] <= placed:
+                    prefix.append(i)
+                    placed.add(i)
+                    extend(prefix, placed)
+                    prefix.pop()
+                    placed.discard(i)
+
+        extend([], set())
+        return result
+
+
+# ---------------------------------------------------------------------------------------------
+# Symbolic world state used while generating paths
+
+
+class _State:
+    """Boolean and numeric facts over root-task variables; absent facts are unknown."""
+
+    __slots__ = ("facts", "values")
+
+    def __init__(self, facts: dict | None = None, values: dict | None = None) -> None:
+        self.facts: dict[tuple[str, tuple[str, ...]], bool] = facts if facts is not None else {}
+        self.values: dict[tuple[str, tuple[str, ...]], int | float] = values if values is not None else {}
+
+    def copy(self) -> "_State":
+        return _State(dict(self.facts), dict(self.values))
+
+    def apply(self, step: Step) -> None:
+        for e in step.effects:
+            self.facts[(e.predicate, e.args)] = e.positive
+        for ne in step.numeric_effects:
+            key = (ne.function, ne.args)
+            if ne.kind == "assign":
+                self.values[key] = ne.amount
+            else:
+                delta = ne.amount if ne.kind == "increase" else -ne.amount
+                self.values[key] = self.values[key] + delta if key in self.values else delta
+
+
+def compare(value: int | float, op: str, bound: int | float) -> bool:
+    """The original's numeric comparison: ``=`` with a small epsilon, or ``>``."""
+    if op == "=":
+        return abs(value - bound) < 1e-9
+    if op == ">":
+        return value > bound
+    if op == "<":
+        return value < bound
+    raise ValueError(op)
+
+
+def _rename(args: Sequence[str], mapping: Mapping[str, str]) -> tuple[str, ...]:
+    return tuple(mapping.get(a, a) for a in args)
+
+
+def _renamed_step(action: Action, mapping: Mapping[str, str]) -> Step:
+    conds: list[Literal | Comparison] = []
+    for c in action.preconditions:
+        if isinstance(c, Literal):
+            conds.append(Literal(c.predicate, _rename(c.args, mapping), c.positive))
+        else:
+            conds.append(Comparison(c.function, _rename(c.args, mapping), c.op, c.value, c.negated))
+    return Step(
+        name=action.name,
+        args=_rename([p.name for p in action.parameters], mapping),
+        preconditions=tuple(conds),
+        effects=tuple(Literal(e.predicate, _rename(e.args, mapping), e.positive) for e in action.effects),
+        numeric_effects=tuple(
+            NumericEffect(n.kind, n.function, _rename(n.args, mapping), n.amount) for n in action.numeric_effects
+        ),
+        capabilities=action.capabilities,
+        pseudo=action.name.startswith(PSEUDO_PREFIX),
+    )
+
+
+@dataclass
+class _Partial:
+    steps: list[Step]
+    trees: list[TreeNode]
+    expansion: bool = False
+
+
+class _PathGenerator:
+    """Path generation with a symbolic world state (§2.4)."""
+
+    def __init__(self, domain: Domain, tdg: _TDG) -> None:
+        self.domain = domain
+        self.tdg = tdg
+        self.root_task = domain.task_by_name[tdg.vertices[tdg.root.id].name]
+
+    def task_paths(self, vid: int, state: _State, mapping: dict[str, str], depth: int) -> list[_Partial]:
+        """Abstract vertex: the concatenated paths of its methods, each from a copy of ``state``."""
+        if depth > MAX_RECURSION:
+            raise MissionError(
+                f"recursive decomposition of task {self.tdg.vertices[vid].name} does not terminate: "
+                "a recursive method needs a numeric precondition that its actions decrease",
+                where=self.domain.source,
+            )
+        v = self.tdg.vertices[vid]
+        task = self.domain.task_by_name[v.name]
+        out: list[_Partial] = []
+        for mid in (c for c in self.tdg.vertices if c.parent == vid and c.kind == "method"):
+            method = mid.method
+            assert method is not None
+            m_map = {}
+            for i, arg in enumerate(method.task_args):
+                param = task.parameters[i].name
+                if param not in mapping:
+                    raise MissionError(
+                        f"method {method.name}: argument {arg} of task {task.name} is not bound to a "
+                        f"parameter of {self.root_task.name}; nested abstract subtasks must receive "
+                        "every argument from the enclosing task",
+                        where=f"{self.domain.source}:{method.line}:{method.column}",
+                    )
+                m_map[arg] = mapping[param]
+            for partial in self.method_paths(mid, state.copy(), m_map, depth):
+                out.append(
+                    _Partial(
+                        partial.steps,
+                        [TreeNode("task", task.name, _rename([p.name for p in task.parameters], mapping),
+                                  (TreeNode("method", method.name,
+                                            _rename([p.name for p in method.parameters], m_map),
+                                            tuple(partial.trees)),))],
+                        partial.expansion,
+                    )
+                )
+        return out
+
+    def method_paths(self, m: _Vertex, incoming: _State, mu: dict[str, str], depth: int) -> list[_Partial]:
+        results: list[_Partial] = []
+        for order in self.tdg.orderings(m):
+            state = incoming.copy()
+            child_lists: list[list[_Partial]] = []
+            failed = False
+            expansion = False
+            for k, idx in enumerate(order):
+                vid, args, _sid = m.children[idx]
+                child = self.tdg.vertices[vid]
+                if child.kind == "primitive":
+                    action = child.action
+                    assert action is not None
+                    mapping = {p.name: mu[a] for p, a in zip(action.parameters, args) if a in mu}
+                    step = _renamed_step(action, mapping)
+                    ok, assumed, guard = self._check(step, state, self._later_steps(m, order[k + 1:], mu))
+                    if not ok:
+                        failed = True
+                        break
+                    for key, val in assumed[0]:
+                        state.facts[key] = val
+                    for key, val in assumed[1]:
+                        state.values[key] = val
+                    expansion = expansion or guard
+                    state.apply(step)
+                    child_lists.append(
+                        [_Partial([step], [] if step.pseudo else [TreeNode("action", step.name, step.args)])]
+                    )
+                else:
+                    callee = self.domain.task_by_name[child.name]
+                    nu = {p.name: mu[a] for p, a in zip(callee.parameters, args) if a in mu}
+                    child_lists.append(self.task_paths(vid, state, nu, depth + 1))
+            if failed:
+                continue
+            combined: list[_Partial] = []
+            for lst in child_lists:
+                if not lst:
+                    continue  # an abstract subtask without executable method disappears (quirk)
+                if not combined:
+                    combined = [_Partial(list(p.steps), list(p.trees), p.expansion) for p in lst]
+                    continue
+                combined = [
+                    _Partial(p.steps + q.steps, p.trees + q.trees, p.expansion or q.expansion)
+                    for q in lst
+                    for p in combined
+                ]
+            if not combined:
+                combined = [_Partial([], [])]
+            for p in combined:
+                p.expansion = p.expansion or expansion
+            results.extend(combined)
+        return results
+
+    def _check(self, step: Step, state: _State, later: list[Step]):
+        """Check a primitive step's preconditions against ``state`` with the original's quirks.
+
+        Returns ``(executable, (facts, values) to assume, expansion guard)``.  A numeric
+        comparison with a known value *overwrites* the executable flag (the original's bug, which
+        the reference outputs depend on); the ``not`` of a comparison is ignored.  Unknown facts
+        are assumed; a ``>`` guard is assumed at ``N - sum of later decrements`` so that a
+        recursive method runs once more and then stops."""
+        executable = True
+        facts: list = []
+        values: list = []
+        guard = False
+        for c in step.preconditions:
+            if isinstance(c, Literal):
+                key = (c.predicate, c.args)
+                if key in state.facts:
+                    if state.facts[key] != c.positive:
+                        executable = False
+                else:
+                    facts.append((key, c.positive))
+            else:
+                key = (c.function, c.args)
+                if key in state.values:
+                    executable = compare(state.values[key], c.op, c.value)
+                elif c.op == ">":
+                    delta = sum(
+                        (n.amount if n.kind == "increase" else -n.amount)
+                        for s in later for n in s.numeric_effects
+                        if (n.function, n.args) == key and n.kind != "assign"
+                    )
+                    values.append((key, c.value - delta))
+                    guard = guard or delta < 0
+                else:
+                    values.append((key, c.value))
+        return executable, (facts, values), guard
+
+    def _later_steps(self, m: _Vertex, positions: list[int], mu: dict[str, str]) -> list[Step]:
+        """The renamed primitive steps that follow in the ordering (for ``>`` guards)."""
+        out = []
+        for j in positions:
+            vid, args, _ = m.children[j]
+            v = self.tdg.vertices[vid]
+            if v.kind == "primitive" and v.action is not None:
+                mapping = {p.name: mu[a] for p, a in zip(v.action.parameters, args) if a in mu}
+                out.append(_renamed_step(v.action, mapping))
+        return out
+
+
+def task_paths(domain: Domain, task: str) -> list[Path]:
+    """The decomposition paths of abstract ``task`` in decomposition-number order."""
+    tdg = _TDG(domain, task)
+    gen = _PathGenerator(domain, tdg)
+    root = domain.task_by_name[task]
+    identity = {p.name: p.name for p in root.parameters}
+    return [
+        Path(tuple(p.steps), p.trees[0], p.expansion)
+        for p in gen.task_paths(tdg.root.id, _State(), identity, 0)
+    ]
+
+
+def all_task_paths(domain: Domain) -> dict[str, list[Path]]:
+    """Paths of every abstract task of the domain (used or not, as the original does)."""
+    return {t.name: task_paths(domain, t.name) for t in domain.tasks}
+
+
+# ---------------------------------------------------------------------------------------------
+# Grounding a path for one task instance (§2.5)
+
+Value = str | tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class GroundPredicates:
+    """Preconditions and net effects of a decomposition of one task instance."""
+
+    preconditions: tuple[Literal | Comparison, ...]  # path order, duplicates kept
+    effects: tuple[Literal, ...]  # ground net effects, then non-ground ones
+    numeric_effects: tuple[tuple[str, tuple[str, ...], str, int], ...]  # (fn, args, kind, amount)
+
+    @property
+    def ground_effects(self) -> tuple[Literal, ...]:
+        return tuple(e for e in self.effects if not any(a.startswith("?") for a in e.args))
+
+
+def _groundings(args: tuple[str, ...], binding: Mapping[str, Value]) -> list[tuple[str, ...]] | None:
+    """Ground argument tuples (cartesian over collection values), or None if some is unbound."""
+    choices: list[tuple[str, ...]] = []
+    for a in args:
+        if a not in binding:
+            return None
+        v = binding[a]
+        choices.append(v if isinstance(v, tuple) else (v,))
+    return [tuple(c) for c in itertools.product(*choices)]
+
+
+def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
+    """Instantiate a path with an instance's parameter values (root parameter -> value)."""
+    pre: list[Literal | Comparison] = []
+    ground_eff: dict[tuple[str, tuple[str, ...]], bool] = {}
+    free_eff: dict[tuple[str, tuple[str, ...]], bool] = {}
+    numeric: dict[tuple[str, tuple[str, ...]], tuple[str, int]] = {}
+    free_numeric: list[tuple[str, tuple[str, ...], str, int]] = []
+    seen_ground: set[tuple[str, tuple[str, ...]]] = set()
+    seen_numeric: set[tuple[str, tuple[str, ...]]] = set()
+    seen_free: set[tuple[str, tuple[str, ...]]] = set()
+    for step in path.steps:
+        for c in step.preconditions:
+            grounds = _groundings(c.args, binding)
+            if isinstance(c, Literal):
+                if grounds is None:
+                    if (c.predicate, c.args) not in seen_free:
+                        pre.append(c)
+                    continue
+                for g in grounds:
+                    if (c.predicate, g) not in seen_ground:
+                        pre.append(Literal(c.predicate, g, c.positive))
+            else:
+                if grounds is None:
+                    pre.append(c)
+                    continue
+                for g in grounds:
+                    if (c.function, g) not in seen_numeric:
+                        pre.append(Comparison(c.function, g, c.op, c.value, c.negated))
+        for e in step.effects:
+            grounds = _groundings(e.args, binding)
+            if grounds is None:
+                free_eff[(e.predicate, e.args)] = e.positive
+                seen_free.add((e.predicate, e.args))
+                continue
+            for g in grounds:
+                ground_eff[(e.predicate, g)] = e.positive
+                seen_ground.add((e.predicate, g))
+        for n in step.numeric_effects:
+            grounds = _groundings(n.args, binding)
+            if grounds is None:
+                free_numeric.append((n.function, n.args, n.kind, n.amount))
+                continue
+            for g in grounds:
+                key = (n.function, g)
+                seen_numeric.add(key)
+                if n.kind == "assign":
+                    numeric[key] = ("assign", n.amount)
+                else:
+                    delta = n.amount if n.kind == "increase" else -n.amount
+                    kind, old = numeric.get(key, ("increase", 0))
+                    numeric[key] = (kind, old + delta)
+    effects = [Literal(p, a, v) for (p, a), v in ground_eff.items()]
+    effects += [Literal(p, a, v) for (p, a), v in free_eff.items()]
+    return GroundPredicates(
+        preconditions=tuple(pre),
+        effects=tuple(effects),
+        numeric_effects=tuple((f, a, k, v) for (f, a), (k, v) in numeric.items()) + tuple(free_numeric),
+    )

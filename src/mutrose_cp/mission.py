@@ -1,0 +1,151 @@
+"""A mission: the four inputs loaded, and the pipeline stages run on demand.
+
+This is the library entry point (``Mission.load``) used by the CLI, the tests and embedding
+applications.  Each stage is computed once and cached: expansion, HTN paths, Task Graph,
+constraints.  Both decomposition algorithms read the same Task Graph.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Callable
+
+from .constraints import Constraint, generate_constraints
+from .errors import MissionError
+from .expansion import Expansion, expand
+from .htn import Path as HtnPath
+from .htn import task_paths
+from .io.config import Configuration, load_configuration
+from .io.goal_model import GoalModel, load_goal_model
+from .io.hddl import Domain, load_domain
+from .io.knowledge import WorldKnowledge, load_knowledge
+from .taskgraph import TaskGraph, build_task_graph
+from .world import InitialState, build_initial_state
+
+
+def resolve_config_path(relative: str, config_path: Path) -> Path:
+    """Resolve a path from the configuration: the current directory first (as the original
+    does), then the mission folder (the configuration's parent's parent), then its folder."""
+    p = Path(relative)
+    if p.is_absolute():
+        return p
+    candidates = [Path.cwd() / p, config_path.parent.parent / p, config_path.parent / p]
+    for c in candidates:
+        if c.exists():
+            return c
+    return candidates[1] if (config_path.parent.parent / p).parent.exists() else candidates[0]
+
+
+def find_mission_files(folder: str | os.PathLike, config_name: str | None = None) -> tuple[Path, Path, Path]:
+    """The HDDL, goal model and configuration of a mission folder (``hddl/ gm/ configuration/``).
+
+    With several configurations, ``config_name`` picks one (file name or its distinguishing
+    suffix, e.g. ``Delivery`` for ``configurationDelivery.json``); the goal model whose name
+    contains that suffix is chosen."""
+    root = Path(folder)
+    if not root.is_dir():
+        raise MissionError(f"cannot read mission folder: {root} is not a directory", str(root))
+    hddls = sorted((root / "hddl").glob("*.hddl"))
+    gms = sorted(p for p in (root / "gm").glob("*") if p.is_file())
+    configs = sorted(p for p in (root / "configuration").glob("*") if p.suffix.lower() in (".json", ".xml"))
+    missing = [n for n, lst in (("hddl/*.hddl", hddls), ("gm/*", gms), ("configuration/*.json|xml", configs)) if not lst]
+    if missing:
+        raise MissionError(f"mission folder has no {', '.join(missing)} (expected hddl/ gm/ configuration/ knowledge/)",
+                           str(root))
+    if config_name:
+        chosen = [c for c in configs if c.name == config_name or c.stem == config_name
+                  or c.stem.removeprefix("configuration") == config_name]
+        if not chosen:
+            raise MissionError(f"no configuration named {config_name!r}; available: "
+                               + ", ".join(c.name for c in configs), str(root / "configuration"))
+        config = chosen[0]
+    else:
+        jsons = [c for c in configs if c.suffix.lower() == ".json"]
+        if len({c.stem for c in configs}) > 1:
+            raise MissionError("several configurations; choose one with --config: "
+                               + ", ".join(c.name for c in configs), str(root / "configuration"))
+        config = (jsons or configs)[0]
+    suffix = config.stem.removeprefix("configuration")
+    gm = next((g for g in gms if suffix and suffix in g.stem), gms[0])
+    return hddls[0], gm, config
+
+
+@dataclass
+class Mission:
+    """The loaded inputs of a mission and its lazily computed pipeline stages."""
+
+    domain: Domain
+    goal_model: GoalModel
+    config: Configuration
+    knowledge: WorldKnowledge
+    config_path: Path
+    warnings: list[str] = field(default_factory=list)
+
+    @classmethod
+    def load(cls, hddl: str | os.PathLike, gm: str | os.PathLike, config: str | os.PathLike) -> "Mission":
+        """Read and validate the four inputs (the world file is named by the configuration).
+
+        All problems of the three named files are collected before raising, so one run reports
+        everything that is wrong."""
+        from .check import cross_check  # local import: check builds on the loaders
+
+        problems = []
+        loaded = {}
+        for key, loader, path in (("domain", load_domain, hddl), ("gm", load_goal_model, gm),
+                                  ("config", load_configuration, config)):
+            try:
+                loaded[key] = loader(path)
+            except MissionError as err:
+                problems.extend(err.problems)
+        if problems:
+            raise MissionError(problems)
+        cfg: Configuration = loaded["config"]
+        world_path = resolve_config_path(cfg.world_db.path, Path(config))
+        knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id)
+        mission = cls(loaded["domain"], loaded["gm"], cfg, knowledge, Path(config))
+        mission.warnings.extend(getattr(cfg, "warnings", ()))
+        mission.warnings.extend(mission.goal_model.warnings)
+        cross = cross_check(mission.domain, mission.goal_model, cfg)
+        if cross:
+            raise MissionError(cross)
+        return mission
+
+    # -- pipeline stages ------------------------------------------------------------------------
+    @cached_property
+    def initial_state(self) -> InitialState:
+        return build_initial_state(self.domain, self.config, self.knowledge)
+
+    @cached_property
+    def expansion(self) -> Expansion:
+        return expand(self.goal_model, self.domain, self.config, self.knowledge)
+
+    @cached_property
+    def paths(self) -> dict[str, list[HtnPath]]:
+        """Decomposition paths of every abstract task of the domain (used or not)."""
+        return {t.name: task_paths(self.domain, t.name) for t in self.domain.tasks}
+
+    @cached_property
+    def task_graph(self) -> TaskGraph:
+        return build_task_graph(self.expansion, self.goal_model, self.config, self.initial_state, self.paths)
+
+    @cached_property
+    def constraints(self) -> list[Constraint]:
+        return generate_constraints(self.task_graph)
+
+    def exploratory(self, progress: Callable[[int, int], None] | None = None) -> list[list[int]]:
+        """Valid mission decompositions by the original's explicit combination."""
+        from .solve.exploratory import ExploratoryDecomposer
+
+        return ExploratoryDecomposer(self.task_graph, self.constraints, self.domain, self.goal_model,
+                                     self.config, self.initial_state, progress).run()
+
+    def output_path(self) -> Path:
+        return resolve_output_path(self.config.output.file_path, self.config_path)
+
+
+def resolve_output_path(relative: str, config_path: Path) -> Path:
+    """Outputs go where the configuration says, relative to the current directory."""
+    p = Path(relative)
+    return p if p.is_absolute() else Path.cwd() / p

@@ -1,0 +1,423 @@
+"""Output in the original MutRoSe schema (spec ``output.md`` §2 and §4).
+
+The JSON is written exactly as Boost.PropertyTree writes it (every scalar a string, empty lists
+as ``""``, ``\\/`` escapes, 4-space layout), because a simulator and other tools already read
+these files.  Files are streamed to a temporary file and renamed into place, so a failed run
+never leaves a half-written output.
+"""
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path as FsPath
+from typing import IO, Any, Iterable, Iterator, Mapping
+
+from .constraints import EC, FB, SEQ, Constraint
+from .errors import MissionError
+from .io.config import Configuration
+from .io.hddl import Comparison, Domain, Literal
+from .taskgraph import Decomposition, TaskGraph
+from .world import InitialState
+
+Tree = Any  # str | list[Tree] | dict[str, Tree]
+
+
+# ---------------------------------------------------------------------------------------------
+# Atomic files
+
+
+@contextmanager
+def atomic_writer(path: str | os.PathLike, mode: str = "w") -> Iterator[IO]:
+    """Write to a temporary file beside ``path`` and rename it into place on success."""
+    target = FsPath(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        with os.fdopen(fd, mode, encoding=None if "b" in mode else "utf-8", newline="" if "b" not in mode else None) as fh:
+            yield fh
+        os.replace(tmp, target)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+# ---------------------------------------------------------------------------------------------
+# Boost-compatible JSON
+
+
+def _escape(s: str) -> str:
+    out = []
+    for ch in s:
+        o = ord(ch)
+        if ch == '"':
+            out.append('\\"')
+        elif ch == "\\":
+            out.append("\\\\")
+        elif ch == "/":
+            out.append("\\/")
+        elif ch == "\b":
+            out.append("\\b")
+        elif ch == "\f":
+            out.append("\\f")
+        elif ch == "\n":
+            out.append("\\n")
+        elif ch == "\r":
+            out.append("\\r")
+        elif ch == "\t":
+            out.append("\\t")
+        elif o < 0x20 or o > 0x7E:
+            out.extend(f"\\u00{b:02X}" for b in ch.encode("utf-8"))
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
+    """Serialize like ``boost::property_tree::write_json`` (pretty): empty containers are ``""``."""
+    if isinstance(tree, str):
+        fh.write(_escape(tree))
+        return
+    if not tree:
+        fh.write('""')
+        return
+    pad = " " * (indent + 4)
+    if isinstance(tree, dict):
+        fh.write("{\n")
+        items = list(tree.items())
+        for i, (k, v) in enumerate(items):
+            fh.write(f"{pad}{_escape(k)}: ")
+            write_boost_json(v, fh, indent + 4)
+            fh.write(",\n" if i < len(items) - 1 else "\n")
+        fh.write(" " * indent + "}")
+    else:
+        fh.write("[\n")
+        for i, v in enumerate(tree):
+            fh.write(pad)
+            write_boost_json(v, fh, indent + 4)
+            fh.write(",\n" if i < len(tree) - 1 else "\n")
+        fh.write(" " * indent + "]")
+
+
+# ---------------------------------------------------------------------------------------------
+# Predicates as printed
+
+
+@dataclass(frozen=True)
+class PrintedPredicate:
+    text: str  # "not RoomA.is_clean"
+    args: tuple[str, ...]
+    sorts: tuple[str, ...]  # argument sorts of the first HDDL declaration
+
+
+class PredicatePrinter:
+    """Turns decomposition literals into ``<arg>.<attribute>`` strings via semantic mappings."""
+
+    def __init__(self, domain: Domain, config: Configuration, state: InitialState) -> None:
+        self.domain = domain
+        self.config = config
+        self.sorts = state.sorts
+
+    def _mapping(self, lit: Literal, types: Mapping[str, str]):
+        for m in self.config.semantic_mapping:
+            if m.pred != lit.predicate or len(m.arg_sorts) < len(lit.args):
+                continue
+            ok = True
+            for arg, sort in zip(lit.args, m.arg_sorts):
+                if arg.startswith("?"):
+                    t = types.get(arg)
+                    if t is None or (sort != t and sort != self.domain.parent_of.get(t)):
+                        ok = False
+                        break
+                elif arg not in self.sorts.get(sort, ()):
+                    ok = False
+                    break
+            if ok:
+                return m
+        return None
+
+    def render(self, lit: Literal, types: Mapping[str, str], dec: Decomposition, kind: str) -> PrintedPredicate | None:
+        m = self._mapping(lit, types)
+        if m is None:
+            robot_typed = any(a.startswith("?") and types.get(a) in ("robot", "robotteam") for a in lit.args)
+            if any(a.startswith("?") for a in lit.args) and robot_typed:
+                return None
+            args = " ".join(lit.args)
+            raise MissionError(
+                f"No Semantic Mapping exists for predicate [{lit.predicate} {args}] when trying to generate "
+                f"output for task {dec.instance.id}: {dec.instance.name} (add an attribute mapping for "
+                f"'{lit.predicate}' to the configuration's semantic_mapping)",
+                f"{self.config.source}: semantic_mapping",
+            )
+        if m.type != "attribute" or m.mapped_type != "predicate":
+            return None
+        decls = self.domain.predicate_declarations(lit.predicate)
+        sorts = tuple(p.type for p in decls[0].parameters) if decls else ()
+        prefix = "" if lit.positive else "not "
+        first = lit.args[0] if lit.args else ""
+        return PrintedPredicate(f"{prefix}{first}.{m.name}", lit.args, sorts)
+
+    def printed(self, dec: Decomposition) -> tuple[list[PrintedPredicate], list[PrintedPredicate]]:
+        task = self.domain.task_by_name[dec.instance.name]
+        types = {p.name: p.type for p in task.parameters}
+        pre = [self.render(c, types, dec, "precondition") for c in dec.predicates.preconditions if isinstance(c, Literal)]
+        eff = [self.render(e, types, dec, "effect") for e in dec.predicates.effects]
+        return [p for p in pre if p is not None], [e for e in eff if e is not None]
+
+
+def _value(v: str | tuple[str, ...]) -> str:
+    return "[" + ",".join(v) + "]" if isinstance(v, tuple) else v
+
+
+# ---------------------------------------------------------------------------------------------
+# The output document
+
+
+@dataclass
+class OutputModel:
+    """Everything the writers need, with keys already assigned."""
+
+    tg: TaskGraph
+    constraints: list[Constraint]
+    decompositions: Iterable[list[int]]  # valid mission decompositions (vertex indices)
+    domain: Domain
+    config: Configuration
+    state: InitialState
+    space: Mapping[str, Any] | None = None  # optional mission_decomposition_space section
+
+
+class OutputBuilder:
+    def __init__(self, model: OutputModel) -> None:
+        self.m = model
+        self.decs = model.tg.decompositions()
+        self.key = {d.index: f"t{i}" for i, d in enumerate(self.decs)}
+        self.printer = PredicatePrinter(model.domain, model.config, model.state)
+
+    def actions(self) -> list[tuple[str, tuple[str, ...]]]:
+        names = sorted({s.name for d in self.decs for s in d.decomposition.path.actions})
+        return [(n, self.m.domain.action_by_name[n].capabilities) for n in names]
+
+    def task_entry(self, dec: Decomposition, group: bool, divisible: bool) -> dict[str, Tree]:
+        inst = dec.instance
+        task = self.m.domain.task_by_name[inst.name]
+        values: dict[str, str] = {p.name: "" for p in task.parameters}
+        for pv in inst.parameters:
+            if pv.hddl_param in values:
+                values[pv.hddl_param] = _value(pv.value)
+        pre, eff = self.printer.printed(dec)
+        loc = inst.location
+        return {
+            "id": dec.id,
+            "name": inst.name,
+            "arguments": {p.name: p.type for p in task.parameters},
+            "arguments_values": values,
+            "locations": list(loc) if isinstance(loc, tuple) else (loc or ""),
+            "robots_num": (
+                {"fixed": "True", "num": str(inst.robot_number.min)}
+                if inst.robot_number.fixed
+                else {"fixed": "False", "min": str(inst.robot_number.min), "max": str(inst.robot_number.max)}
+            ),
+            "preconditions": [self._pred(p) for p in pre],
+            "effects": [self._pred(p) for p in eff],
+            "triggering_events": list(inst.triggering_events),
+            "decomposition": {
+                f"a{i}": {"name": s.name, "arguments": " ".join(s.args)} for i, s in enumerate(dec.path.actions)
+            },
+            "group": str(group),
+            "divisible": str(divisible),
+        }
+
+    @staticmethod
+    def _pred(p: PrintedPredicate) -> dict[str, str]:
+        return {"predicate": p.text, "vars": p.args[-1] if p.args else "", "var_types": p.sorts[-1] if p.sorts else ""}
+
+    def constraint_entry(self, c: Constraint) -> dict[str, Tree]:
+        entry: dict[str, Tree] = {
+            "type": "SEQ" if c.kind == SEQ else "EC",
+            "task_instances": {"t0": self.key[c.first], "t1": self.key[c.second]},
+        }
+        if c.kind == EC:
+            entry["group"] = str(c.group)
+            entry["divisible"] = str(c.divisible)
+        return entry
+
+    def write_json(self, fh: IO[str]) -> None:
+        """Stream the JSON document (mission decompositions may be many)."""
+        fh.write("{\n    \"actions\": ")
+        write_boost_json([{"name": n, "capabilities": caps[-1] if caps else ""} for n, caps in self.actions()], fh, 4)
+        fh.write(",\n    \"tasks\": ")
+        tasks = {self.key[d.index]: self.task_entry(d.decomposition, d.group, d.divisible) for d in self.decs}
+        write_boost_json(tasks, fh, 4)
+        fh.write(",\n    \"constraints\": ")
+        write_boost_json([self.constraint_entry(c) for c in self.m.constraints], fh, 4)
+        fh.write(",\n    \"mission_decompositions\": ")
+        first = True
+        for md in self.m.decompositions:
+            fh.write("[\n" if first else ",\n")
+            first = False
+            fh.write(" " * 8)
+            write_boost_json([self.key[i] for i in md], fh, 8)
+        fh.write('""' if first else "\n    ]")
+        if self.m.space is not None:
+            fh.write(",\n    \"mission_decomposition_space\": ")
+            write_boost_json(self.m.space, fh, 4)
+        fh.write("\n}\n")
+
+    # -- XML -----------------------------------------------------------------------------------
+    def write_xml(self, fh: IO[str]) -> None:
+        """The original's XML: four sibling top-level elements after the declaration."""
+        w = _XmlWriter(fh)
+        fh.write('<?xml version="1.0" encoding="utf-8"?>\n')
+        w.open("actions", 0)
+        for i, (name, caps) in enumerate(self.actions()):
+            w.open(f"action{i}", 1)
+            w.leaf("name", name, 2)
+            if caps:
+                w.open("capabilities", 2, {"number": str(len(caps))})
+                for j, cap in enumerate(caps):
+                    w.leaf(f"capability{j}", cap, 3)
+                w.close("capabilities", 2)
+            else:
+                w.empty("capabilities", 2, {"number": "0"})
+            w.close(f"action{i}", 1)
+        w.close("actions", 0)
+        w.open("tasks", 0)
+        for i, d in enumerate(self.decs):
+            self._xml_task(w, i, d.decomposition, d.group, d.divisible)
+        w.close("tasks", 0)
+        if self.m.constraints:
+            w.open("constraints", 0)
+            for i, c in enumerate(self.m.constraints):
+                w.open(f"constraint{i}", 1)
+                w.leaf("type", "SEQ" if c.kind == SEQ else "EC", 2)
+                w.open("task_instances", 2)
+                w.leaf("id0", "task" + self.key[c.first][1:], 3)
+                w.leaf("id1", "task" + self.key[c.second][1:], 3)
+                w.close("task_instances", 2)
+                if c.kind == EC:
+                    w.leaf("group", str(c.group), 2)
+                    w.leaf("divisible", str(c.divisible), 2)
+                w.close(f"constraint{i}", 1)
+            w.close("constraints", 0)
+        else:
+            w.empty("constraints", 0)
+        first = True
+        for i, md in enumerate(self.m.decompositions):
+            if first:
+                w.open("mission_decompositions", 0)
+                first = False
+            w.open(f"decomposition{i}", 1)
+            w.open("tasks", 2)
+            for j, v in enumerate(md):
+                w.leaf(f"t{j}", "task" + self.key[v][1:], 3)
+            w.close("tasks", 2)
+            w.close(f"decomposition{i}", 1)
+        if first:
+            w.empty("mission_decompositions", 0)
+        else:
+            w.close("mission_decompositions", 0)
+
+    def _xml_task(self, w: "_XmlWriter", i: int, dec: Decomposition, group: bool, divisible: bool) -> None:
+        inst = dec.instance
+        task = self.m.domain.task_by_name[inst.name]
+        w.open(f"task{i}", 1)
+        w.leaf("id", dec.id, 2)
+        w.leaf("name", inst.name, 2)
+        w.open("arguments", 2)
+        values: dict[str, str] = {p.name: "" for p in task.parameters}
+        for pv in inst.parameters:
+            if pv.hddl_param in values:
+                values[pv.hddl_param] = " ".join(pv.value) if isinstance(pv.value, tuple) else pv.value
+        for j, p in enumerate(task.parameters):
+            w.open(f"arg{j}", 3)
+            w.leaf("name", p.name, 4)
+            w.leaf("type", p.type, 4)
+            w.leaf("value", values[p.name], 4)
+            w.close(f"arg{j}", 3)
+        w.close("arguments", 2)
+        loc = inst.location
+        locs = list(loc) if isinstance(loc, tuple) else ([loc] if loc else [])
+        if locs:
+            w.open("locations", 2)
+            for j, l in enumerate(locs):
+                w.leaf(f"t{j}", l, 3)
+            w.close("locations", 2)
+        rn = inst.robot_number
+        attrs = {"fixed": "True", "num": str(rn.min)} if rn.fixed else {"fixed": "False", "min": str(rn.min), "max": str(rn.max)}
+        w.empty("robots_num", 2, attrs)
+        pre, eff = self.printer.printed(dec)
+        if pre:
+            w.open("preconditions", 2)
+            for j, p in enumerate(pre):
+                w.leaf(f"prec{j}", p.text, 3, {"vars": ",".join(p.args), "var_types": ",".join(p.sorts)})
+            w.close("preconditions", 2)
+        if eff:
+            w.open("effects", 2)
+            for j, p in enumerate(eff):
+                w.leaf(f"eff{j}", p.text, 3, {"vars": ",".join(p.args), "var_types": ",".join(p.sorts)})
+            w.close("effects", 2)
+        if inst.triggering_events:
+            w.open("triggering_events", 2)
+            for j, e in enumerate(inst.triggering_events):
+                w.leaf(f"event{j}", e, 3)
+            w.close("triggering_events", 2)
+        if dec.path.actions:
+            w.open("decomposition", 2)
+            for j, s in enumerate(dec.path.actions):
+                w.leaf(f"action{j}", s.name, 3)
+            w.close("decomposition", 2)
+        w.leaf("group", str(group), 2)
+        w.leaf("divisible", str(divisible), 2)
+        w.close(f"task{i}", 1)
+
+
+def _xml_escape(s: str) -> str:
+    return (s.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+            .replace('"', "&quot;").replace("'", "&apos;"))
+
+
+class _XmlWriter:
+    """Boost ``write_xml`` layout with a 4-space indent."""
+
+    def __init__(self, fh: IO[str]) -> None:
+        self.fh = fh
+
+    @staticmethod
+    def _attrs(attrs: Mapping[str, str] | None) -> str:
+        return "".join(f' {k}="{_xml_escape(v)}"' for k, v in (attrs or {}).items())
+
+    def open(self, tag: str, level: int, attrs: Mapping[str, str] | None = None) -> None:
+        self.fh.write(f"{'    ' * level}<{tag}{self._attrs(attrs)}>\n")
+
+    def close(self, tag: str, level: int) -> None:
+        self.fh.write(f"{'    ' * level}</{tag}>\n")
+
+    def empty(self, tag: str, level: int, attrs: Mapping[str, str] | None = None) -> None:
+        self.fh.write(f"{'    ' * level}<{tag}{self._attrs(attrs)}/>\n")
+
+    def leaf(self, tag: str, text: str, level: int, attrs: Mapping[str, str] | None = None) -> None:
+        if text == "":
+            self.empty(tag, level, attrs)
+        else:
+            self.fh.write(f"{'    ' * level}<{tag}{self._attrs(attrs)}>{_xml_escape(text)}</{tag}>\n")
+
+
+def write_output(model: OutputModel, path: str | os.PathLike, file_type: str) -> None:
+    """Write the output file atomically in ``json`` or ``xml``."""
+    builder = OutputBuilder(model)
+    with atomic_writer(path) as fh:
+        if file_type == "xml":
+            builder.write_xml(fh)
+        else:
+            builder.write_json(fh)
+
+
+def render_json(model: OutputModel) -> str:
+    buf = io.StringIO()
+    OutputBuilder(model).write_json(buf)
+    return buf.getvalue()

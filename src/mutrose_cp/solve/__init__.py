@@ -1,0 +1,1 @@
+"""Decomposition algorithms over the Task Graph: exploratory (baseline) and CP-SAT."""

@@ -1,0 +1,223 @@
+"""Valid mission decompositions by explicit combination (spec ``semantics.md`` §7).
+
+This is the original MutRoSe algorithm, kept as the baseline: it walks the mission queue of the
+Task Graph, carries every partial mission decomposition along, and filters them with
+preconditions, parallel conflicts and achieve conditions.  Its cost grows with the product of
+the choices, which is what the CP-SAT decomposer avoids.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+from ..conditions import holds
+from ..constraints import EC, SEQ, Constraint
+from ..errors import NoDecompositionError
+from ..io.config import Configuration
+from ..io.goal_model import GoalModel
+from ..io.hddl import Domain
+from ..taskgraph import ATASK, OP, OR, TaskGraph, Vertex
+from ..world import InitialState
+from .semantics import (
+    Effects,
+    State,
+    achieve_test,
+    effects_of,
+    ground_preconditions_hold,
+    robot_preconditions,
+    translate_robot_effects,
+)
+
+
+@dataclass
+class _VMD:
+    """A partial mission decomposition: decomposition vertices in order, and the id set."""
+
+    order: list[int]
+    ids: set[str]
+
+
+class ExploratoryDecomposer:
+    def __init__(self, tg: TaskGraph, constraints: list[Constraint], domain: Domain, gm: GoalModel,
+                 config: Configuration, initial: InitialState,
+                 progress: Callable[[int, int], None] | None = None) -> None:
+        self.tg = tg
+        self.domain = domain
+        self.gm = gm
+        self.config = config
+        self.progress = progress
+        facts: dict = {}
+        for lit in initial.literals:
+            facts.setdefault((lit.predicate, lit.args), lit.positive)
+        values: dict = {}
+        for key, value in initial.functions:
+            values.setdefault(key, value)
+        self.initial = State(facts, values)
+        self.vmds: list[_VMD] = []
+        self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
+        self.by_id = {d.content: d.index for d in tg.decompositions()}
+        self.ec_partners: dict[int, set[int]] = {}
+        self.seq_after: dict[int, set[int]] = {}
+        for c in constraints:
+            if c.kind == EC:
+                self.ec_partners.setdefault(c.first, set()).add(c.second)
+                self.ec_partners.setdefault(c.second, set()).add(c.first)
+            elif c.kind == SEQ:
+                self.seq_after.setdefault(c.first, set()).add(c.second)
+        self.robot_pre = {d.index: robot_preconditions(domain, d.decomposition) for d in tg.decompositions()}
+
+    # ------------------------------------------------------------------------------------------
+    def run(self) -> list[list[int]]:
+        """All valid mission decompositions, each as decomposition vertices in mission order."""
+        if self.tg.unique_branch:
+            return self._unique_branch()
+        self.queue = [v.index for v in self.tg.vertices
+                      if v.kind == ATASK or (v.kind == OP and (len(self.tg.children(v.index)) >= 2 or v.is_achieve_type))]
+        self.total = len(self.queue)
+        self.pos = 0
+        while self.pos < len(self.queue):
+            self._visit({})
+        return [m.order for m in self.vmds]
+
+    def _unique_branch(self) -> list[list[int]]:
+        """§7.7: every decomposition valid in the initial state is its own decomposition."""
+        out = []
+        for t in self.tg.tasks():
+            for d in self.tg.decompositions_of(t.index):
+                if ground_preconditions_hold(d.decomposition, self.initial):
+                    out.append([d.index])
+        return out
+
+    def _pop(self) -> Vertex:
+        v = self.tg.vertices[self.queue[self.pos]]
+        self.pos += 1
+        if self.progress is not None:
+            self.progress(self.pos, self.total)
+        return v
+
+    def _front_is_child_of(self, v: int) -> bool:
+        return self.pos < len(self.queue) and self.tg.vertices[self.queue[self.pos]].parent == v
+
+    def _visit(self, effects_in: dict[str, Effects]) -> dict[str, Effects]:
+        v = self._pop()
+        if v.kind == ATASK:
+            return self._task(v, effects_in)
+        return self._operator(v)
+
+    def _operator(self, v: Vertex) -> dict[str, Effects]:
+        E: dict[str, Effects] = {}
+        if v.content == ";":
+            while self._front_is_child_of(v.index):
+                E.update(self._visit(E))
+        elif v.content == "#" and self.tg.is_or(v.index):
+            saved = self.vmds
+            collected: list[_VMD] = []
+            while self._front_is_child_of(v.index):
+                self.vmds = [(_VMD(list(m.order), set(m.ids))) for m in saved]
+                E.update(self._visit({}))
+                collected.extend(self.vmds)
+            self.vmds = collected
+        else:
+            while self._front_is_child_of(v.index):
+                E.update(self._visit({}))
+            if v.content == "#":
+                self._solve_conflicts(E)
+        test = achieve_test(v, self.gm, self.config)
+        if test is not None:
+            kept = []
+            for m in self.vmds:
+                state = self.initial.copy()
+                for key in sorted(m.ids):
+                    if key in E:
+                        state.apply(E[key])
+                if holds(test, state.fact, state.value):
+                    kept.append(m)
+            if not kept:
+                raise NoDecompositionError(
+                    f"No decomposition satisfied achieve condition of goal {v.achieve_goal}",
+                    f"{self.gm.source}: goal {v.achieve_goal}",
+                )
+            self.vmds = kept
+        return E
+
+    def _solve_conflicts(self, E: dict[str, Effects]) -> None:
+        kept = []
+        for m in self.vmds:
+            seen: dict = {}
+            ok = True
+            for key in sorted(m.ids):
+                if key not in E:
+                    continue
+                for atom, val in E[key].facts:
+                    if atom in seen and seen[atom] != val:
+                        ok = False
+                        break
+                    seen[atom] = val
+                if not ok:
+                    break
+            if ok:
+                kept.append(m)
+        if not kept:
+            raise NoDecompositionError("Could not solve conflicts in valid mission decompositions generation: "
+                                       "every combination of parallel tasks sets some fact both true and false")
+        self.vmds = kept
+
+    def _robot_ok(self, d: int, members: set[str]) -> bool:
+        """Robot-related non-ground preconditions against execution-constrained partners."""
+        pre = self.robot_pre[d]
+        if not pre:
+            return True
+        partners = self.ec_partners.get(d, set())
+        state: dict = {}
+        dec = self.tg.vertices[d].decomposition
+        for key in sorted(members):
+            e = self.by_id[key]
+            if e == d or e not in partners or e in self.seq_after.get(d, set()):
+                continue  # only partners that may run before d can have changed the robot
+            for lit in translate_robot_effects(self.domain, self.tg.vertices[e].decomposition, dec):
+                state[(lit.predicate, lit.args)] = lit.positive
+        for lit in pre:
+            known = state.get((lit.predicate, lit.args))
+            if known is not None and known != lit.positive:
+                return False
+        return True
+
+    def _task(self, v: Vertex, effects_in: dict[str, Effects]) -> dict[str, Effects]:
+        decs = self.tg.decompositions_of(v.index)
+        accepted: dict[str, Effects] = {}
+        if not self.vmds:
+            for d in decs:
+                if ground_preconditions_hold(d.decomposition, self.initial) and self._robot_ok(d.index, set()):
+                    self.vmds.append(_VMD([d.index], {d.content}))
+                    accepted[d.content] = self.effects[d.index]
+            if not self.vmds:
+                raise NoDecompositionError(
+                    f"NO VALID DECOMPOSITIONS FOR TASK {v.content}: {v.instance.name} "
+                    "(no decomposition's preconditions hold in the initial world state)",
+                    f"task instance {v.content}",
+                )
+            return accepted
+        emitted: list[_VMD] = []
+        for m in self.vmds:
+            work = set(m.ids)
+            base = self.initial.copy()
+            for key in sorted(work):
+                if key in effects_in:
+                    base.apply(effects_in[key])
+            for d in decs:
+                if not ground_preconditions_hold(d.decomposition, base):
+                    continue
+                if not self._robot_ok(d.index, work):
+                    continue
+                work.add(d.content)  # the working set keeps growing (original behaviour)
+                emitted.append(_VMD(m.order + [d.index], set(work)))
+                accepted[d.content] = self.effects[d.index]
+        if not emitted:
+            raise NoDecompositionError(
+                f"NO VALID DECOMPOSITIONS FOR TASK {v.content}: {v.instance.name} "
+                "(in every mission decomposition built so far, each of its decompositions has a precondition "
+                "that the world state contradicts)",
+                f"task instance {v.content}",
+            )
+        self.vmds = emitted
+        return accepted

@@ -1,0 +1,374 @@
+"""The Task Graph (spec ``semantics.md`` §5), shared by both decomposition algorithms.
+
+Vertices are operators (``;``, ``#``, ``FALLBACK``), means-end goal nodes, task instances and
+their decompositions; edges are AND/OR refinements, context dependencies (CD) and execution
+constraints (EC).  The graph is built from the runtime annotation tree, then reduced to the
+"minimal Task Graph" whose vertex order fixes the output keys ``t0, t1, ...``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import networkx as nx
+
+from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
+from .conditions import Test, holds, translate
+from .errors import MissionError
+from .expansion import Expansion, TaskInstance
+from .htn import GroundPredicates, Path, ground_path
+from .io.config import Configuration
+from .io.goal_model import GoalModel
+from .query import Binding
+from .world import InitialState
+
+AND, OR, CD, EC = "AND", "OR", "CD", "EC"
+OP, GOALNODE, ATASK, DECOMPOSITION = "op", "goal", "task", "decomposition"
+
+
+@dataclass(frozen=True)
+class Decomposition:
+    """One HTN decomposition path of one task instance: ``AT1_1|2``."""
+
+    id: str
+    instance: TaskInstance
+    number: int  # 1-based path number
+    path: Path
+    predicates: GroundPredicates
+
+
+@dataclass
+class Vertex:
+    index: int
+    kind: str  # OP | GOALNODE | ATASK | DECOMPOSITION
+    content: str  # operator symbol, goal id, instance id or decomposition id
+    parent: int = -1
+    group: bool = True
+    divisible: bool = True
+    related_goal: str | None = None
+    is_forall: bool = False
+    is_achieve_type: bool = False
+    achieve_goal: str | None = None
+    instance: TaskInstance | None = None
+    decomposition: Decomposition | None = None
+    var_maps: Mapping[str, Binding] = field(default_factory=dict)  # variable values at this node
+
+
+@dataclass
+class TaskGraph:
+    """Vertices in index order and a networkx digraph over their indices (edge attr ``type``)."""
+
+    vertices: list[Vertex] = field(default_factory=list)
+    graph: nx.DiGraph = field(default_factory=nx.DiGraph)
+    unique_branch: bool = False
+
+    def add(self, vertex: Vertex) -> Vertex:
+        vertex.index = len(self.vertices)
+        self.vertices.append(vertex)
+        self.graph.add_node(vertex.index)
+        return vertex
+
+    def add_edge(self, a: int, b: int, kind: str, **flags) -> None:
+        self.graph.add_edge(a, b, type=kind, **flags)
+
+    def out(self, v: int, *kinds: str) -> list[int]:
+        """Successors of ``v`` through edges of the given types, in insertion order."""
+        return [u for u, d in self.graph.adj[v].items() if d["type"] in kinds]
+
+    def children(self, v: int) -> list[int]:
+        return self.out(v, AND, OR)
+
+    def edge_type(self, a: int, b: int) -> str:
+        return self.graph.edges[a, b]["type"]
+
+    def decompositions(self) -> list[Vertex]:
+        return [v for v in self.vertices if v.kind == DECOMPOSITION]
+
+    def tasks(self) -> list[Vertex]:
+        return [v for v in self.vertices if v.kind == ATASK]
+
+    def decompositions_of(self, task: int) -> list[Vertex]:
+        return [self.vertices[u] for u in self.out(task, AND) if self.vertices[u].kind == DECOMPOSITION]
+
+    def is_or(self, v: int) -> bool:
+        return any(d["type"] == OR for d in self.graph.adj[v].values())
+
+
+class _Builder:
+    """Initial build (§5.1) with context dependencies (§5.2)."""
+
+    def __init__(self, exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
+                 paths: dict[str, list[Path]]) -> None:
+        self.exp = exp
+        self.gm = gm
+        self.config = config
+        self.state = state
+        self.paths = paths
+        self.tg = TaskGraph()
+        self.instances = {i.id: i for i in exp.instances}
+        self.cd_edges: list[tuple[int, int]] = []
+
+    def build(self) -> TaskGraph:
+        self._visit(self.exp.rat, None, None)
+        return self.tg
+
+    def _context_test(self, goal_id: str, node: RatNode) -> Test | None:
+        g = self.gm.node(goal_id)
+        if g.context is None or g.context.kind != "condition" or g.context.condition is None:
+            return None
+        return translate(g.context.condition, node.var_maps, self.config, f"{self.gm.source}: goal {goal_id}")
+
+    def _visit(self, node: RatNode, parent: Vertex | None, parent_rat: RatNode | None) -> None:
+        tg = self.tg
+        edge = OR if parent_rat is not None and parent_rat.or_decomposition else AND
+        if node.kind == GOAL:
+            return
+        if node.kind == TASK:
+            if parent is None:
+                raise MissionError("the goal model's root is a task; a mission needs a root goal", self.gm.source)
+            self._add_task(node, parent, edge)
+            return
+        test = None
+        if node.is_forall_dummy:
+            first = node.children[0]
+            goal = first.related_goal
+            is_forall, is_achieve = True, False
+        else:
+            goal = node.related_goal
+            is_forall = False
+            gm_goal = self.gm.node(goal) if goal else None
+            is_achieve = bool(gm_goal is not None and gm_goal.goal_type == "Achieve" and not node.inner)
+            if not node.inner and goal:
+                test = self._context_test(goal, node)
+        vertex = Vertex(
+            index=-1,
+            kind=GOALNODE if node.kind == MEANSEND else OP,
+            content=node.content,
+            parent=parent.index if parent else -1,
+            group=node.group,
+            divisible=node.divisible,
+            related_goal=goal,
+            is_forall=is_forall,
+            is_achieve_type=is_achieve and not (parent is not None and parent.is_forall),
+            achieve_goal=goal,
+            var_maps=node.var_maps,
+        )
+        if test is not None and not holds(test, self.state.value_of, self.state.function_value):
+            pending: list[int] = []
+            if not self._enabled(test, parent, pending):
+                return  # a false context that nothing enables: the branch disappears
+            tg.add(vertex)
+            for d in pending:
+                self.cd_edges.append((d, vertex.index))
+        else:
+            tg.add(vertex)
+        if parent is not None:
+            tg.add_edge(parent.index, vertex.index, edge)
+        for child in node.children:
+            self._visit(child, vertex, node)
+
+    def _add_task(self, node: RatNode, parent: Vertex, edge: str) -> None:
+        tg = self.tg
+        inst = self.instances.get(node.content)
+        if inst is None:
+            raise MissionError(f"Could not find AT {node.content} definition", self.gm.source)
+        if not parent.group and not (inst.robot_number.fixed and inst.robot_number.min == 1):
+            raise MissionError(
+                f"Non group task [{inst.id}] does not have 1 robot in its declaration "
+                "(tasks under a goal with Group=False are executed by one robot: set RobotNumber to 1)",
+                f"{self.gm.source}: task {inst.gm_task}",
+            )
+        tv = tg.add(Vertex(-1, ATASK, inst.id, parent.index, parent.group, parent.divisible, instance=inst))
+        tg.add_edge(parent.index, tv.index, edge)
+        binding = inst.binding
+        for n, path in enumerate(self.paths[inst.name], start=1):
+            dec = Decomposition(f"{inst.id}|{n}", inst, n, path, ground_path(path, binding))
+            dv = tg.add(Vertex(-1, DECOMPOSITION, dec.id, tv.index, parent.group, parent.divisible,
+                               instance=inst, decomposition=dec))
+            tg.add_edge(tv.index, dv.index, AND)
+
+    def _enabled(self, test: Test, parent: Vertex | None, pending: list[int]) -> bool:
+        """Search the already-built graph for tasks that can make a false context true (§5.2)."""
+        tg = self.tg
+        visited: set[int] = set()
+        state = self.state
+
+        def search(v: int, par: bool) -> bool:
+            if v == -1:
+                return False
+            vx = tg.vertices[v]
+            if vx.kind != ATASK:
+                if tg.is_or(v) or vx.content == "FALLBACK":
+                    if v == 0:
+                        return False
+                    visited.add(v)
+                    return search(vx.parent, False)
+                par2 = par or (vx.kind == OP and vx.content == "#")
+                for u in tg.children(v):
+                    if u in visited:
+                        continue
+                    found = search(u, par2)
+                    visited.add(u)
+                    if found:
+                        return True
+                visited.add(v)
+                return search(vx.parent, False)
+            ok = False
+            for dv in tg.decompositions_of(v):
+                dec = dv.decomposition
+                assert dec is not None
+                effects = {(e.predicate, e.args): e.positive for e in dec.predicates.ground_effects}
+
+                def fact(p, a, effects=effects):
+                    return effects[(p, a)] if (p, a) in effects else state.value_of(p, a)
+
+                if holds(test, fact, state.function_value):
+                    if par:
+                        pending.append(dv.index)
+                    ok = True
+            return ok
+
+        return search(parent.index if parent else -1, False)
+
+
+def _final_context_edges(tg: TaskGraph, cd_edges: list[tuple[int, int]]) -> None:
+    """Redirect each CD edge ``d -> goal`` to every task vertex below the goal (§5.3)."""
+    for d, c in cd_edges:
+        stack, seen, targets = [c], {c}, []
+        while stack:
+            v = stack.pop()
+            if tg.vertices[v].kind == ATASK:
+                targets.append(v)
+            for u in reversed(list(tg.graph.adj[v])):
+                if u not in seen:
+                    seen.add(u)
+                    stack.append(u)
+        for t in sorted(targets):
+            if not tg.graph.has_edge(d, t):
+                tg.add_edge(d, t, CD)
+
+
+def _execution_constraint_edges(tg: TaskGraph) -> None:
+    """EC edges from Group/Divisible with the original's priority rules (§5.4)."""
+    active: int | None = None
+    stack: list[int] = []
+    flags: dict[int, tuple[bool, bool]] = {}
+    cur: list[int] = []
+    snap: dict[int, list[int]] = {}
+    or_nodes: set[int] = set()
+    for v, vx in enumerate(tg.vertices):
+        q = vx.parent
+        if active is not None:
+            if q <= tg.vertices[active].parent:
+                if not stack:
+                    cur = []
+                    active = None
+                else:
+                    active = stack.pop()
+            if (q >= 0 and tg.vertices[q].is_forall and active is not None and active >= q) or q in or_nodes:
+                cur = list(snap.get(q, []))
+        if vx.kind in (OP, GOALNODE) and tg.is_or(v):
+            or_nodes.add(v)
+        if vx.is_forall or v in or_nodes:
+            snap[v] = list(cur)
+        if vx.kind in (OP, GOALNODE) and (not vx.group or not vx.divisible):
+            if active is None:
+                flags[v] = (vx.group, vx.divisible)
+                active = v
+            elif flags[active][0]:
+                flags[v] = (vx.group, vx.divisible)
+                stack.append(active)
+                active = v
+        elif vx.kind == ATASK and active is not None:
+            group, divisible = flags[active]
+            for t in sorted(cur):
+                if not tg.graph.has_edge(t, v) and not tg.graph.has_edge(v, t):
+                    tg.add_edge(t, v, EC, group=group, divisible=divisible)
+                    tg.add_edge(v, t, EC, group=group, divisible=divisible)
+            cur.append(v)
+
+
+def _is_unique_branch(tg: TaskGraph) -> bool:
+    return not any(
+        vx.kind in (OP, GOALNODE) and len(tg.children(vx.index)) >= 2 for vx in tg.vertices
+    )
+
+
+def _trim(tg: TaskGraph) -> TaskGraph:
+    """The minimal Task Graph (§5.5)."""
+    root = next(v.index for v in tg.vertices if v.kind in (OP, GOALNODE) and len(tg.children(v.index)) >= 2)
+    new = TaskGraph()
+    index: dict[int, int] = {}
+
+    def first_edge_type(old: int) -> str:
+        kids = tg.children(old)
+        return tg.edge_type(old, kids[0]) if kids else AND
+
+    def insert(old: int, parent_old: int | None) -> None:
+        vx = tg.vertices[old]
+        nv = Vertex(**{**vx.__dict__, "index": -1,
+                       "parent": index[parent_old] if parent_old is not None else -1})
+        new.add(nv)
+        index[old] = nv.index
+        if parent_old is not None:
+            new.add_edge(index[parent_old], nv.index, first_edge_type(parent_old))
+
+    def insert_tasks(op_old: int, under_old: int) -> None:
+        for u in tg.children(op_old):
+            if tg.vertices[u].kind == ATASK:
+                insert(u, under_old)
+                for d in tg.out(u, AND):
+                    nd = Vertex(**{**tg.vertices[d].__dict__, "index": -1, "parent": index[u]})
+                    new.add(nd)
+                    index[d] = nd.index
+                    new.add_edge(index[u], nd.index, AND)
+
+    def kept_ancestor(old: int) -> int:
+        p = tg.vertices[old].parent
+        while p not in index:
+            p = tg.vertices[p].parent
+        return p
+
+    for vx in tg.vertices[root:]:
+        v = vx.index
+        if vx.kind in (ATASK, DECOMPOSITION):
+            continue
+        if v != root and not _descends(tg, v, root):
+            continue
+        keep = vx.kind == OP and (len(tg.children(v)) >= 2 or vx.is_achieve_type)
+        if v == root:
+            insert(v, None)
+            insert_tasks(v, v)
+        elif keep:
+            insert(v, kept_ancestor(v))
+            insert_tasks(v, v)
+        else:
+            insert_tasks(v, kept_ancestor(v))
+    for a, b, d in tg.graph.edges(data=True):
+        if d["type"] in (CD, EC) and a in index and b in index:
+            new.graph.add_edge(index[a], index[b], **d)
+    return new
+
+
+def _descends(tg: TaskGraph, v: int, root: int) -> bool:
+    while v != -1:
+        if v == root:
+            return True
+        v = tg.vertices[v].parent
+    return False
+
+
+def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
+                     paths: dict[str, list[Path]]) -> TaskGraph:
+    """Build, connect and trim the Task Graph of an expanded mission."""
+    builder = _Builder(exp, gm, config, state, paths)
+    tg = builder.build()
+    if not tg.vertices:
+        raise MissionError("the mission has no task: every branch was removed or no task instance exists",
+                           gm.source)
+    _final_context_edges(tg, builder.cd_edges)
+    _execution_constraint_edges(tg)
+    if _is_unique_branch(tg):
+        tg.unique_branch = True
+        return tg
+    return _trim(tg)
