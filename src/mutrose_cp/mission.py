@@ -89,7 +89,7 @@ class Mission:
 
         All problems of the three named files are collected before raising, so one run reports
         everything that is wrong."""
-        from .check import cross_check  # local import: check builds on the loaders
+        from .check import check_annotations, cross_check  # local import: check builds on the loaders
 
         problems = []
         loaded = {}
@@ -107,6 +107,7 @@ class Mission:
         mission = cls(loaded["domain"], loaded["gm"], cfg, knowledge, Path(config))
         mission.warnings.extend(getattr(cfg, "warnings", ()))
         mission.warnings.extend(mission.goal_model.warnings)
+        mission.warnings.extend(str(p) for p in check_annotations(mission.goal_model))
         cross = cross_check(mission.domain, mission.goal_model, cfg)
         if cross:
             raise MissionError(cross)
