@@ -15,7 +15,7 @@ from typing import Iterator
 
 from lxml import etree
 
-from .errors import MissionError, located
+from .errors import MissionError, Problem, located
 from .io.config import Configuration, SemanticMapping
 from .io.hddl import Domain
 from .io.knowledge import WorldKnowledge, child, element_children, parse_bool, parse_number, text_of
@@ -162,11 +162,11 @@ def build_sorts(domain: Domain, config: Configuration, knowledge: WorldKnowledge
 
 def _missing_id(knowledge: WorldKnowledge, el: etree._Element) -> None:
     """The original aborts with ``No such node (name)``; we say which element lacks it."""
-    raise MissionError(
+    raise MissionError(Problem(
         located(knowledge.source, el.sourceline),
         f"element <{el.tag}> is a type-mapped record but has no <{knowledge.unique_id}> child "
         f"(its unique id); do not use a mapped type name as a plain field tag",
-    )
+    ))
 
 
 # ---------------------------------------------------------------------------------------------

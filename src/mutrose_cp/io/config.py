@@ -104,7 +104,7 @@ def load_configuration(path: str | os.PathLike[str]) -> Configuration:
         try:
             text = data.decode("utf-8-sig")
         except UnicodeDecodeError as exc:
-            raise MissionError(source, f"configuration is not valid UTF-8: {exc.reason}") from None
+            raise MissionError(Problem(source, f"configuration is not valid UTF-8: {exc.reason}")) from None
         return parse_configuration_json(text, source)
     return parse_configuration_xml(data, source)
 
@@ -115,9 +115,9 @@ def parse_configuration_json(text: str, source: str) -> Configuration:
     try:
         data = json.loads(text, parse_int=str, parse_float=str, parse_constant=str)
     except json.JSONDecodeError as exc:
-        raise MissionError(located(source, exc.lineno, exc.colno), f"invalid JSON: {exc.msg}") from None
+        raise MissionError(Problem(located(source, exc.lineno, exc.colno), f"invalid JSON: {exc.msg}")) from None
     if not isinstance(data, dict):
-        raise MissionError(source, "the configuration must be a JSON object")
+        raise MissionError(Problem(source, "the configuration must be a JSON object"))
     return _Builder(source).build(data)
 
 
@@ -127,10 +127,10 @@ def parse_configuration_xml(data: bytes | str, source: str) -> Configuration:
     root = parse_tolerant_xml(data, source, "configuration")
     builder = _Builder(source)
     if root.tag != "configuration":
-        raise MissionError(
+        raise MissionError(Problem(
             located(source, root.sourceline),
             f"missing key configuration (the root element is <{root.tag}>)",
-        )
+        ))
     return builder.build(_xml_to_plain(root, builder))
 
 

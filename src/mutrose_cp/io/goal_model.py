@@ -7,6 +7,7 @@ custom property, and parses the embedded expressions.  Problems are collected pe
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -196,17 +197,15 @@ def _scalar_text(value: Any) -> str | None:
 
 
 def _number(value: Any) -> float | None:
-    """A coordinate: a JSON number, or a numeric string (the original reads every scalar as text)."""
-    if isinstance(value, bool):
+    """A coordinate: a finite JSON number, or a numeric string (the original reads every scalar
+    as text).  Non-finite values are refused because coordinates are sort keys."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         return None
-    if isinstance(value, (int, float)):
-        return float(value)
-    if isinstance(value, str):
-        try:
-            return float(value)
-        except ValueError:
-            return None
-    return None
+    try:
+        number = float(value)
+    except ValueError:
+        return None
+    return number if math.isfinite(number) else None
 
 
 def _flag(value: str | None) -> tuple[bool, bool]:
@@ -450,9 +449,8 @@ class _Reader:
 
     def _read_properties(
         self, where: str, node_id: str, text: str, props: dict[str, str], fields: dict[str, Any]
-    ) -> bool:
-        """Interpret every custom property (spec §4, §6–§8); False when one is invalid."""
-        before = len(self.problems)
+    ) -> None:
+        """Interpret every custom property (spec §4, §6–§8) into ``fields``; errors become problems."""
         for key in props:
             if key not in KNOWN_PROPERTIES:
                 self.problem(where, f"Invalid property {key} in vertex {text}")
@@ -499,7 +497,6 @@ class _Reader:
         robots = props.get("RobotNumber", "").strip()
         if robots:
             fields["robot_number"] = self._attempt(where, "", lambda: parse_robot_number(robots))
-        return len(self.problems) == before
 
     def _read_context(self, where: str, value: str) -> Context | None:
         """``CreationCondition`` (spec §6): kind by substring, text between the first '"' and the

@@ -73,18 +73,18 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Elem
         root = etree.fromstring(data, parser)
     except etree.XMLSyntaxError as exc:
         line, col = (exc.position if exc.position else (None, None))
-        raise MissionError(located(source, line, col), f"XML syntax error in {what}: {exc.msg}") from None
+        raise MissionError(Problem(located(source, line, col), f"XML syntax error in {what}: {exc.msg}")) from None
     if root is not None:
         info = root.getroottree().docinfo
         if info.internalDTD is not None or info.doctype:
-            raise MissionError(
+            raise MissionError(Problem(
                 located(source, _line_of(data, b"<!DOCTYPE")),
                 f"DTD and entity declarations are not allowed in {what}",
-            )
+            ))
     errors = [e for e in parser.error_log if e.type_name not in TOLERATED_XML_ERRORS]
     if errors or root is None:
         if not errors:
-            raise MissionError(source, f"XML syntax error in {what}: the document has no root element")
+            raise MissionError(Problem(source, f"XML syntax error in {what}: the document has no root element"))
         raise MissionError(
             [Problem(located(source, e.line, e.column), f"XML syntax error in {what}: {e.message}") for e in errors]
         )
@@ -97,7 +97,7 @@ def read_bytes(path: str | os.PathLike[str], what: str) -> bytes:
         with open(path, "rb") as fh:
             return fh.read()
     except OSError as exc:
-        raise MissionError(os.fspath(path), f"cannot read {what} file: {exc.strerror or exc}") from None
+        raise MissionError(Problem(os.fspath(path), f"cannot read {what} file: {exc.strerror or exc}")) from None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -278,8 +278,8 @@ def load_knowledge(
     else:
         root = next(doc_root.iterdescendants(tag=xml_root), None) if xml_root else None
     if root is None:
-        raise MissionError(
+        raise MissionError(Problem(
             located(source, doc_root.sourceline),
             f"Root element [{xml_root}] (world_db.xml_root) was not found in world knowledge",
-        )
+        ))
     return WorldKnowledge(source=source, root=root, unique_id=unique_id or "name")

@@ -1,0 +1,26 @@
+"""Shared fixtures: the reference corpus (third-party missions with the original's outputs)."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", ROOT.parent / "shared" / "reference"))
+if not REFERENCE.is_absolute():
+    REFERENCE = (ROOT / REFERENCE).resolve()
+
+
+def require_reference() -> Path:
+    """The corpus path; a missing corpus skips locally and fails on CI."""
+    if not REFERENCE.is_dir():
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"reference corpus not found at {REFERENCE} (set MUTROSE_REFERENCE)")
+        pytest.skip(f"reference corpus not found at {REFERENCE}")
+    return REFERENCE
+
+
+@pytest.fixture
+def reference() -> Path:
+    return require_reference()
