@@ -20,11 +20,13 @@ from mutrose_cp.io.knowledge import (
     text_of,
 )
 
-_DEFAULT_REFERENCE = Path(__file__).resolve().parents[1] / ".." / "shared" / "reference"
+_REPO = Path(__file__).resolve().parents[1]
+_REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", "../shared/reference"))
+_REFERENCE = _REFERENCE if _REFERENCE.is_absolute() else (_REPO / _REFERENCE).resolve()
 
 
 def _reference_root() -> Path | None:
-    root = Path(os.environ.get("MUTROSE_REFERENCE", _DEFAULT_REFERENCE))
+    root = _REFERENCE
     return root if root.is_dir() else None
 
 

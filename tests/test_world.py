@@ -15,12 +15,14 @@ from mutrose_cp.io.hddl import Domain, load_domain
 from mutrose_cp.io.knowledge import load_knowledge
 from mutrose_cp.world import GroundLiteral, InitialState, build_initial_state
 
-_DEFAULT_REFERENCE = Path(__file__).resolve().parents[1] / ".." / "shared" / "reference"
+_REPO = Path(__file__).resolve().parents[1]
+_REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", "../shared/reference"))
+_REFERENCE = _REFERENCE if _REFERENCE.is_absolute() else (_REPO / _REFERENCE).resolve()
 
 
 def reference_dir() -> Path:
     """The reference corpus; skipped when absent, except on CI where it must be present."""
-    root = Path(os.environ.get("MUTROSE_REFERENCE", _DEFAULT_REFERENCE))
+    root = _REFERENCE
     if not root.is_dir():
         if os.environ.get("CI", "").lower() == "true":
             pytest.fail("reference corpus not found (set MUTROSE_REFERENCE)")

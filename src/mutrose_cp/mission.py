@@ -142,6 +142,26 @@ class Mission:
         return ExploratoryDecomposer(self.task_graph, self.constraints, self.domain, self.goal_model,
                                      self.config, self.initial_state, progress).run()
 
+    def encoding(self, explain: bool = False):
+        """The boolean model of the valid mission decompositions (see ``solve/encoding.py``)."""
+        from .solve.encoding import Encoder
+
+        return Encoder(self.task_graph, self.constraints, self.domain, self.goal_model, self.config,
+                       self.initial_state, explain).encode()
+
+    def decomposition_space(self, progress: Callable[[int, int], None] | None = None, keep: bool = True):
+        """The valid mission decompositions as a product of independently solved components."""
+        from .solve.cpsat import build_space
+
+        return build_space(self.encoding(), {d.index: d.index for d in self.task_graph.decompositions()},
+                           keep=keep, progress=progress)
+
+    def decomposition_model(self):
+        """The whole decomposition space as one CP-SAT model, for embedding (see ``api.py``)."""
+        from .api import DecompositionModel
+
+        return DecompositionModel.build(self)
+
     def output_path(self) -> Path:
         return resolve_output_path(self.config.output.file_path, self.config_path)
 

@@ -98,6 +98,14 @@ class _Query:
         msg = f"Cannot solve condition in QueriedProperty of Goal {self.goal_id}"
         return MissionError(f"{msg}: {detail}" if detail else msg, where=self.goal_id)
 
+    def first_record(self, binding: Binding) -> Element | None:
+        """The binding's first record; callers that bound only ids get the top-level record
+        with that id (and the base type's tag)."""
+        if binding.records:
+            return binding.records[0]
+        ids = binding.ids
+        return self.knowledge.find_record(base_type(binding.type), ids[0]) if ids else None
+
     # -- candidates ---------------------------------------------------------------------------
 
     def candidates(self) -> tuple[Sequence[Element], str | None]:
@@ -112,14 +120,16 @@ class _Query:
                 raise self.invalid(f"variable [{queried}] is not instantiated")
             if is_collection_type(binding.type) or len(binding.records) > 1:
                 raise self.invalid(f"variable [{queried}] must hold exactly one record to be queried")
-            if not binding.records:
-                return [], None
-            return [c for c in element_children(binding.records[0]) if c.tag == qtype], None
+            first = self.first_record(binding)
+            if first is None:
+                return [], None  # the variable holds "" (its query found nothing)
+            return [c for c in element_children(first) if c.tag == qtype], None
         var, *path = queried.split(".")
         binding = self.bindings.get(var)
-        if binding is None or not binding.records:
+        first = self.first_record(binding) if binding is not None else None
+        if binding is None or first is None:
             raise self.invalid(f"variable [{var}] is not instantiated")
-        rid = self.knowledge.record_id(binding.records[0])
+        rid = self.knowledge.record_id(first)
         el = self.knowledge.find_record(base_type(binding.type), rid) if rid is not None else None
         if el is None:
             raise self.invalid(f"no {base_type(binding.type)} record [{rid}] in the world knowledge")
@@ -146,9 +156,10 @@ class _Query:
         """Values of field ``attr`` of ``var``'s (first) record: a leaf is a comma/whitespace
         separated list, a container lists one value per child element."""
         binding = self.bindings.get(var)
-        if binding is None or not binding.records:
+        first = self.first_record(binding) if binding is not None else None
+        if first is None:
             raise self.unsolvable(f"variable [{var}] is not instantiated")
-        el = child(binding.records[0], attr)
+        el = child(first, attr)
         if el is None:
             raise self.unsolvable(f"[{var}.{attr}] does not exist in the world knowledge")
         kids = list(element_children(el))

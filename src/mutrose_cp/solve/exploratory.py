@@ -209,8 +209,7 @@ class ExploratoryDecomposer:
                     continue
                 if not self._robot_ok(d.index, work):
                     continue
-                work.add(d.content)  # the working set keeps growing (original behaviour)
-                emitted.append(_VMD(m.order + [d.index], set(work)))
+                emitted.append(_VMD(m.order + [d.index], work | {d.content}))
                 accepted[d.content] = self.effects[d.index]
         if not emitted:
             raise NoDecompositionError(

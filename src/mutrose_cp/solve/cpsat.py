@@ -1,0 +1,351 @@
+"""CP-SAT decomposer: the decomposition space as factored CP-SAT models.
+
+The boolean model of :mod:`mutrose_cp.solve.encoding` is split into connected components (parts
+that share no variable).  The valid mission decompositions are the Cartesian product of the
+components' solutions, so the space is counted exactly as a product, streamed with a mixed-radix
+counter, sampled uniformly by sampling each component, and optimised component by component.
+Each component is solved by CP-SAT (``enumerate_all_solutions`` with one worker: with more
+workers solutions were lost or repeated); components that are a single exactly-one choice are
+read off directly.
+"""
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+from typing import Callable, Iterator, Mapping, Sequence
+
+from ortools.sat.python import cp_model
+
+from ..errors import NoDecompositionError
+from .encoding import FALSE, TRUE, BoolModel, Encoding, Lit, Record
+
+ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
+
+
+# ---------------------------------------------------------------------------------------------
+# Posting records to CP-SAT
+
+
+class CpBuilder:
+    """Posts :class:`Record` objects to a ``CpModel`` (the whole model or one component)."""
+
+    def __init__(self, bm: BoolModel, model: cp_model.CpModel | None = None) -> None:
+        self.bm = bm
+        self.model = model or cp_model.CpModel()
+        self.vars: dict[int, cp_model.IntVar] = {}
+
+    def var(self, v: int):
+        if v not in self.vars:
+            iv = self.bm.ints.get(v)
+            if iv is not None:
+                self.vars[v] = self.model.NewIntVar(iv.lo, iv.hi, self.bm.names[v])
+            else:
+                self.vars[v] = self.model.NewBoolVar(self.bm.names[v])
+        return self.vars[v]
+
+    def lit(self, l: Lit):
+        if l == TRUE:
+            return self.model.NewConstant(1)
+        if l == FALSE:
+            return self.model.NewConstant(0)
+        assert isinstance(l, int)
+        return self.var(l) if l > 0 else self.var(-l).Not()
+
+    def post(self, r: Record, enforce=None):
+        m = self.model
+        lits = [self.lit(l) for l in r.lits]
+        if r.kind == "clause":
+            c = m.AddBoolOr(lits) if lits else m.AddBoolOr([m.NewConstant(0)])
+        elif r.kind == "sum_eq":
+            target = r.target
+            if target == TRUE:
+                c = m.AddExactlyOne(lits) if enforce is None else m.Add(sum(lits) == 1)
+            elif target == FALSE:
+                c = m.Add(sum(lits) == 0)
+            else:
+                c = m.Add(sum(lits) == self.lit(target))
+        elif r.kind == "and_eq":
+            t = self.lit(r.target)
+            m.AddBoolAnd(lits).OnlyEnforceIf(t)
+            c = m.AddBoolOr([x.Not() for x in lits] + [t])
+        elif r.kind == "or_eq":
+            t = self.lit(r.target)
+            m.AddBoolOr(lits).OnlyEnforceIf(t)
+            for x in lits:
+                m.AddImplication(x, t)
+            c = None
+        elif r.kind == "int_sel":
+            xw, known = r.lits
+            prev_var, prev_const, amount, kind = r.extra
+            target = self.var(r.target)  # type: ignore[arg-type]
+            cur_e = self.var(prev_var) if prev_var is not None else prev_const
+            xw_l, known_l = self.lit(xw), self.lit(known)
+            if kind == "assign":
+                m.Add(target == amount).OnlyEnforceIf(xw_l)
+            else:
+                # adding to an unknown value starts from the amount itself
+                m.Add(target == cur_e + amount).OnlyEnforceIf([xw_l, known_l])
+                m.Add(target == amount).OnlyEnforceIf([xw_l, known_l.Not()])
+            c = m.Add(target == cur_e).OnlyEnforceIf(xw_l.Not())
+        elif r.kind == "cmp_eq":
+            sat = lits[0]
+            op, bound = r.extra
+            target = self.var(r.target)  # type: ignore[arg-type]
+            pos, negc = {
+                "=": (target == bound, target != bound),
+                "<>": (target != bound, target == bound),
+                ">": (target > bound, target <= bound),
+                "<": (target < bound, target >= bound),
+                ">=": (target >= bound, target < bound),
+                "<=": (target <= bound, target > bound),
+            }[op]
+            m.Add(pos).OnlyEnforceIf(sat)
+            c = m.Add(negc).OnlyEnforceIf(sat.Not())
+        else:  # pragma: no cover - records are produced by the encoder only
+            raise ValueError(r.kind)
+        if enforce is not None and c is not None:
+            c.OnlyEnforceIf(enforce)
+        return c
+
+
+# ---------------------------------------------------------------------------------------------
+# Components
+
+
+@dataclass
+class Component:
+    """An independent part of the decomposition space."""
+
+    records: list[Record]
+    choice_vars: list[int]  # decomposition literals of the component (positive var ids)
+    solutions: list[frozenset[int]] | None = None  # chosen decomposition vertices per solution
+    count: int = 0
+
+
+def _components(enc: Encoding) -> list[Component]:
+    bm = enc.model
+    parent = list(range(len(bm.names)))
+
+    def find(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for r in bm.records:
+        vs = r.variables()
+        for a in vs[1:]:
+            ra, rb = find(vs[0]), find(a)
+            if ra != rb:
+                parent[max(ra, rb)] = min(ra, rb)
+    groups: dict[int, Component] = {}
+    constant: list[Component] = []
+    for r in bm.records:
+        vs = r.variables()
+        if not vs:  # a constant record: an empty clause or an exactly-one over nothing
+            if not (r.kind == "sum_eq" and r.target == FALSE):
+                constant.append(Component([r], [], solutions=[], count=0))
+            continue
+        groups.setdefault(find(vs[0]), Component([], [])).records.append(r)
+    dec_var = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
+    for var in sorted(dec_var):
+        root = find(var)
+        groups.setdefault(root, Component([], [])).choice_vars.append(var)
+    return constant + [groups[k] for k in sorted(groups)]
+
+
+class _Collector(cp_model.CpSolverSolutionCallback):
+    def __init__(self, variables: list, ids: list[int], keep: bool) -> None:
+        super().__init__()
+        self.variables = variables
+        self.ids = ids
+        self.keep = keep
+        self.solutions: list[frozenset[int]] = []
+        self.count = 0
+
+    def on_solution_callback(self) -> None:
+        self.count += 1
+        if self.keep:
+            if self.count > ENUMERATION_CAP:
+                self.keep = False
+                self.solutions = []
+                return
+            self.solutions.append(frozenset(i for v, i in zip(self.variables, self.ids) if self.BooleanValue(v)))
+
+
+def _simple_choice(comp: Component) -> list[frozenset[int]] | None:
+    """Solutions of a component that is one exactly-one choice plus unit exclusions."""
+    sums = [r for r in comp.records if r.kind == "sum_eq"]
+    if len(sums) != 1 or sums[0].target != TRUE:
+        return None
+    options = list(sums[0].lits)
+    excluded: set[int] = set()
+    for r in comp.records:
+        if r is sums[0]:
+            continue
+        if r.kind == "clause" and len(r.lits) == 1 and isinstance(r.lits[0], int) and r.lits[0] < 0:
+            excluded.add(-r.lits[0])
+        elif r.kind == "clause" and len(r.lits) == 0:
+            return []
+        else:
+            return None
+    if not all(isinstance(l, int) and l > 0 for l in options):
+        return None
+    return [frozenset([v]) for v in options if v not in excluded]
+
+
+def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
+    """Enumerate a component's solutions (as sets of decomposition literals)."""
+    if not comp.records or comp.solutions == [] and not comp.choice_vars:
+        return
+    simple = _simple_choice(comp)
+    if simple is not None:
+        chosen = [s & frozenset(comp.choice_vars) for s in simple]
+        comp.solutions, comp.count = chosen, len(chosen)
+        return
+    builder = CpBuilder(bm)
+    for r in comp.records:
+        builder.post(r)
+    variables = [builder.var(v) for v in comp.choice_vars]
+    solver = cp_model.CpSolver()
+    solver.parameters.enumerate_all_solutions = True
+    solver.parameters.num_workers = 1
+    collector = _Collector(variables, comp.choice_vars, keep)
+    status = solver.Solve(builder.model, collector)
+    if status not in (cp_model.OPTIMAL, cp_model.FEASIBLE, cp_model.INFEASIBLE):
+        raise RuntimeError(f"CP-SAT could not finish a component: {solver.StatusName(status)}")
+    comp.count = collector.count
+    comp.solutions = collector.solutions if collector.keep else None
+
+
+# ---------------------------------------------------------------------------------------------
+# The space
+
+
+@dataclass
+class DecompositionSpace:
+    """The valid mission decompositions of a mission as a product of components."""
+
+    encoding: Encoding
+    components: list[Component]
+    queue_order: dict[int, int]  # decomposition vertex -> position for listing
+    var_to_dec: dict[int, int] = field(default_factory=dict)
+
+    @property
+    def count(self) -> int:
+        return math.prod(c.count for c in self.components)
+
+    def _decompositions(self, parts: Sequence[frozenset[int]]) -> list[int]:
+        decs = [self.var_to_dec[v] for p in parts for v in p]
+        decs += self.fixed
+        return sorted(decs, key=self.queue_order.__getitem__)
+
+    @property
+    def fixed(self) -> list[int]:
+        """Decompositions chosen in every solution through constant literals."""
+        return [d for d, lit in self.encoding.decomposition_lit.items() if lit == TRUE]
+
+    def __iter__(self) -> Iterator[list[int]]:
+        """All decompositions, in mixed-radix order over the components (last varies fastest)."""
+        comps = self.components
+        if any(c.count == 0 for c in comps):
+            return
+        if any(c.solutions is None for c in comps):
+            raise RuntimeError("a component has too many solutions to list; use count or sample")
+        idx = [0] * len(comps)
+        while True:
+            yield self._decompositions([c.solutions[i] for c, i in zip(comps, idx)])  # type: ignore[index]
+            k = len(comps) - 1
+            while k >= 0:
+                idx[k] += 1
+                if idx[k] < comps[k].count:
+                    break
+                idx[k] = 0
+                k -= 1
+            if k < 0:
+                return
+
+    def sample(self, k: int, seed: int) -> list[list[int]]:
+        """``k`` decompositions drawn uniformly and independently (with replacement)."""
+        rng = random.Random(seed)
+        out = []
+        for _ in range(k):
+            out.append(self._decompositions([rng.choice(c.solutions) for c in self.components]))  # type: ignore[arg-type]
+        return out
+
+    def component_table(self, key: Callable[[int], str]) -> list[dict]:
+        """Per component: its alternative sets of task decompositions (by output key)."""
+        table = []
+        for c in self.components:
+            alts = [sorted((self.var_to_dec[v] for v in s), key=self.queue_order.__getitem__) for s in c.solutions or []]
+            table.append({"count": str(c.count), "alternatives": [[key(d) for d in a] for a in alts]})
+        return table
+
+
+def build_space(enc: Encoding, queue_order: Mapping[int, int], keep: bool = True,
+                progress: Callable[[int, int], None] | None = None) -> DecompositionSpace:
+    comps = _components(enc)
+    for i, comp in enumerate(comps):
+        solve_component(enc.model, comp, keep)
+        if progress is not None:
+            progress(i + 1, len(comps))
+    var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
+    # components without decomposition literals only constrain (e.g. all-constant checks)
+    return DecompositionSpace(enc, [c for c in comps if c.choice_vars or c.count == 0], dict(queue_order), var_to_dec)
+
+
+def minimize(enc: Encoding, costs: Mapping[int, int]) -> tuple[list[int], int]:
+    """A decomposition of least total cost (sum over chosen decompositions), by component."""
+    chosen: list[int] = [d for d, lit in enc.decomposition_lit.items() if lit == TRUE]
+    total = sum(costs.get(d, 0) for d in chosen)
+    var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
+    for comp in _components(enc):
+        simple = _simple_choice(comp)
+        if simple is not None:
+            if not simple:
+                raise NoDecompositionError("no valid mission decomposition exists (a task has no valid decomposition)")
+            best = min(simple, key=lambda s: (sum(costs.get(var_to_dec[v], 0) for v in s), sorted(s)))
+            chosen += [var_to_dec[v] for v in best]
+            total += sum(costs.get(var_to_dec[v], 0) for v in best)
+            continue
+        builder = CpBuilder(enc.model)
+        for r in comp.records:
+            builder.post(r)
+        if comp.choice_vars:
+            builder.model.Minimize(sum(costs.get(var_to_dec[v], 0) * builder.var(v) for v in comp.choice_vars))
+        solver = cp_model.CpSolver()
+        solver.parameters.num_workers = 1
+        status = solver.Solve(builder.model)
+        if status not in (cp_model.OPTIMAL,):
+            raise NoDecompositionError("no valid mission decomposition exists")
+        picked = [var_to_dec[v] for v in comp.choice_vars if solver.BooleanValue(builder.var(v))]
+        chosen += picked
+        total += sum(costs.get(d, 0) for d in picked)
+    return chosen, total
+
+
+def explain(enc: Encoding) -> list[str]:
+    """Why no decomposition exists: a conflicting set of labelled constraints (CP-SAT assumptions)."""
+    reasons: list[str] = []
+    for comp in _components(enc):
+        builder = CpBuilder(enc.model)
+        assumptions = {}
+        for r in comp.records:
+            if r.label:
+                a = builder.model.NewBoolVar(f"assume:{r.label}")
+                builder.post(r, enforce=a)
+                assumptions[a.Index()] = r.label
+            else:
+                builder.post(r)
+        builder.model.AddAssumptions([builder.model.GetBoolVarFromProtoIndex(i) for i in assumptions])
+        solver = cp_model.CpSolver()
+        solver.parameters.num_workers = 1
+        status = solver.Solve(builder.model)
+        if status == cp_model.INFEASIBLE:
+            core = solver.SufficientAssumptionsForInfeasibility()
+            labels = sorted({assumptions[i] for i in core if i in assumptions})
+            reasons.extend(enc.labels.get(l, l) for l in labels)
+            if not labels:
+                reasons.append("the goal model's structure admits no combination (no labelled constraint involved)")
+    return reasons

@@ -1,0 +1,461 @@
+"""The space of valid mission decompositions as a boolean model (spec ``semantics.md`` §7).
+
+The exploratory algorithm filters explicit lists; here the same rules become constraints over
+*choice literals*: one per OR alternative and one per (task instance, decomposition).  World
+facts are carried symbolically: the value of an atom at a point of the Task Graph is "the last
+chosen writer in id order, else the initial value", so preconditions, parallel conflicts and
+achieve conditions become clauses over the writers' literals.  Facts that no decomposition
+changes are folded in as constants while the model is built.
+
+The model is kept in a small solver-neutral form (:class:`BoolModel`) so it can be split into
+independent components before it is handed to CP-SAT (:mod:`mutrose_cp.solve.cpsat`), and every
+auxiliary variable is defined by an equivalence, so each solution is a distinct decomposition.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable, Sequence
+
+from ..conditions import AllOf, AnyOf, FactTest, Test, ValueTest
+from ..constraints import EC, SEQ, Constraint
+from ..io.config import Configuration
+from ..io.goal_model import GoalModel
+from ..io.hddl import Comparison, Domain, Literal
+from ..taskgraph import ATASK, OP, TaskGraph
+from ..world import InitialState
+from .semantics import Effects, achieve_test, effects_of, robot_preconditions, translate_robot_effects
+
+TRUE = "TRUE"
+FALSE = "FALSE"
+Lit = int | str  # variable id (negative = negation) or the constants TRUE / FALSE
+SCALE = 1000  # numeric values are compared as integers in thousandths
+
+
+def neg(lit: Lit) -> Lit:
+    if lit == TRUE:
+        return FALSE
+    if lit == FALSE:
+        return TRUE
+    return -lit  # type: ignore[operator]
+
+
+@dataclass
+class Record:
+    """One constraint of the model.  ``kind``:
+
+    * ``clause``: OR of ``lits``;
+    * ``sum_eq``: sum of ``lits`` == ``target``;
+    * ``and_eq`` / ``or_eq``: ``target`` <=> AND / OR of ``lits``;
+    * ``int_eq``: integer ``target`` == ``base`` + sum of ``terms`` (literal, coefficient);
+    * ``int_sel``: integer ``target`` is the value after writer ``lits[0]`` (``lits[1]``: the value
+      before was known): ``extra = (previous var or None, previous constant, amount, kind)``;
+    * ``cmp_eq``: ``lits[0]`` <=> (integer ``target`` ``op`` ``bound``).
+    """
+
+    kind: str
+    lits: tuple[Lit, ...] = ()
+    target: Lit | None = None
+    label: str = ""
+    extra: tuple = ()  # constants of int_sel / cmp_eq
+    refs: tuple[int, ...] = ()  # further integer variables the record reads
+
+    def variables(self) -> list[int]:
+        out = [abs(l) for l in self.lits if isinstance(l, int)]
+        if isinstance(self.target, int):
+            out.append(abs(self.target))
+        out.extend(self.refs)
+        return out
+
+
+@dataclass
+class IntVar:
+    lo: int
+    hi: int
+
+
+@dataclass
+class BoolModel:
+    """Variables and records; variable ids start at 1."""
+
+    names: list[str] = field(default_factory=lambda: [""])
+    ints: dict[int, IntVar] = field(default_factory=dict)
+    records: list[Record] = field(default_factory=list)
+
+    def new_bool(self, name: str) -> int:
+        self.names.append(name)
+        return len(self.names) - 1
+
+    def new_int(self, name: str, lo: int, hi: int) -> int:
+        v = self.new_bool(name)
+        self.ints[v] = IntVar(lo, hi)
+        return v
+
+    # --- helpers that fold constants ------------------------------------------------------------
+    def clause(self, lits: Iterable[Lit], label: str = "") -> None:
+        kept: list[Lit] = []
+        for l in lits:
+            if l == TRUE:
+                return
+            if l != FALSE and l not in kept:
+                kept.append(l)
+        self.records.append(Record("clause", tuple(kept), label=label))
+
+    def and_of(self, lits: Sequence[Lit], name: str) -> Lit:
+        kept = []
+        for l in lits:
+            if l == FALSE:
+                return FALSE
+            if l != TRUE and l not in kept:
+                kept.append(l)
+        if not kept:
+            return TRUE
+        if len(kept) == 1:
+            return kept[0]
+        v = self.new_bool(name)
+        self.records.append(Record("and_eq", tuple(kept), v))
+        return v
+
+    def or_of(self, lits: Sequence[Lit], name: str) -> Lit:
+        kept = []
+        for l in lits:
+            if l == TRUE:
+                return TRUE
+            if l != FALSE and l not in kept:
+                kept.append(l)
+        if not kept:
+            return FALSE
+        if len(kept) == 1:
+            return kept[0]
+        v = self.new_bool(name)
+        self.records.append(Record("or_eq", tuple(kept), v))
+        return v
+
+
+@dataclass
+class Encoding:
+    """The model plus the maps from Task Graph entities to its literals."""
+
+    model: BoolModel
+    decomposition_lit: dict[int, Lit]  # decomposition vertex -> literal
+    task_lit: dict[int, Lit]  # task vertex -> "active" literal
+    or_choice_lit: dict[tuple[int, int], Lit]  # (OR operator vertex, child vertex) -> literal
+    tasks: list[int]  # task vertices in mission-queue order
+    labels: dict[str, str] = field(default_factory=dict)  # record label -> explanation
+
+
+class Encoder:
+    """Builds the :class:`Encoding` of a Task Graph with the exploratory algorithm's semantics."""
+
+    def __init__(self, tg: TaskGraph, constraints: list[Constraint], domain: Domain, gm: GoalModel,
+                 config: Configuration, initial: InitialState, explain: bool = False) -> None:
+        self.tg = tg
+        self.domain = domain
+        self.gm = gm
+        self.config = config
+        self.explain = explain
+        self.m = BoolModel()
+        self.facts: dict = {}
+        for lit in initial.literals:
+            self.facts.setdefault((lit.predicate, lit.args), lit.positive)
+        self.values: dict = {}
+        for key, value in initial.functions:
+            self.values.setdefault(key, value)
+        self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
+        self.ec: dict[int, set[int]] = {}
+        self.seq_after: dict[int, set[int]] = {}
+        for c in constraints:
+            if c.kind == EC:
+                self.ec.setdefault(c.first, set()).add(c.second)
+                self.ec.setdefault(c.second, set()).add(c.first)
+            elif c.kind == SEQ:
+                self.seq_after.setdefault(c.first, set()).add(c.second)
+        self.x: dict[int, Lit] = {}
+        self.active: dict[int, Lit] = {}
+        self.or_lits: dict[tuple[int, int], Lit] = {}
+        self.labels: dict[str, str] = {}
+        self._chain_cache: dict = {}
+
+    # ------------------------------------------------------------------------------------------
+    def encode(self) -> Encoding:
+        tg = self.tg
+        if tg.unique_branch:
+            return self._unique_branch()
+        queue = [v.index for v in tg.vertices if v.kind in (ATASK, OP)]
+        self.queue_pos = {v: i for i, v in enumerate(queue)}
+        self._choices(0, TRUE)
+        tasks = [v for v in queue if tg.vertices[v].kind == ATASK]
+        for t in tasks:
+            self._task_rules(t)
+        for v in queue:
+            vx = tg.vertices[v]
+            if vx.kind != OP:
+                continue
+            if vx.content == "#" and not tg.is_or(v):
+                self._conflicts(v)
+            test = achieve_test(vx, self.gm, self.config)
+            if test is not None:
+                self._achieve(v, test)
+        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
+
+    def _unique_branch(self) -> Encoding:
+        """§7.7: each initially valid decomposition is a mission decomposition on its own."""
+        tasks = [v.index for v in self.tg.tasks()]
+        all_x: list[Lit] = []
+        for t in tasks:
+            self.active[t] = TRUE
+            for d in self.tg.decompositions_of(t):
+                lit = self.m.new_bool(d.content)
+                self.x[d.index] = lit
+                all_x.append(lit)
+                if not self._initially_valid(d.index):
+                    self.m.clause([neg(lit)], self._label(f"pre:{d.content}", f"{d.content}: a precondition is false in the initial world state"))
+        self.m.records.append(Record("sum_eq", tuple(all_x), TRUE, label="unique-branch"))
+        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
+
+    def _label(self, key: str, text: str) -> str:
+        if self.explain:
+            self.labels[key] = text
+            return key
+        return ""
+
+    def _initially_valid(self, d: int) -> bool:
+        for c in self.tg.vertices[d].decomposition.predicates.preconditions:
+            if any(a.startswith("?") for a in c.args):
+                continue
+            if isinstance(c, Literal):
+                known = self.facts.get((c.predicate, c.args))
+                if known is not None and known != c.positive:
+                    return False
+            else:
+                v = self.values.get((c.function, c.args))
+                if v is not None and not (abs(v - c.value) < 1e-9 if c.op == "=" else v > c.value):
+                    return False
+        return True
+
+    # --- choices ---------------------------------------------------------------------------------
+    def _choices(self, v: int, active: Lit) -> None:
+        """Activity literals: an OR operator picks exactly one child; tasks pick one decomposition."""
+        tg = self.tg
+        vx = tg.vertices[v]
+        self.active[v] = active
+        if vx.kind == ATASK:
+            lits = []
+            for d in tg.decompositions_of(v):
+                lit = self.m.new_bool(d.content)
+                self.x[d.index] = lit
+                lits.append(lit)
+            self.m.records.append(Record("sum_eq", tuple(lits), active,
+                                         label=self._label(f"task:{vx.content}", f"task instance {vx.content} needs exactly one decomposition")))
+            return
+        children = tg.children(v)
+        if tg.is_or(v):
+            lits = []
+            for c in children:
+                lit = self.m.new_bool(f"{vx.related_goal or vx.content}@{v}->{tg.vertices[c].content}")
+                self.or_lits[(v, c)] = lit
+                lits.append(lit)
+                self._choices(c, lit)
+            self.m.records.append(Record("sum_eq", tuple(lits), active, label=f"or:{v}"))
+        else:
+            for c in children:
+                self._choices(c, active)
+
+    def _subtree_decompositions(self, v: int) -> list[int]:
+        tg = self.tg
+        out, stack = [], [v]
+        while stack:
+            u = stack.pop()
+            ux = tg.vertices[u]
+            if ux.kind == ATASK:
+                out.extend(d.index for d in tg.decompositions_of(u))
+            else:
+                stack.extend(tg.children(u))
+        return out
+
+    # --- world values ------------------------------------------------------------------------------
+    def _bool_value(self, atom: tuple, writers: list[tuple[int, bool]]) -> tuple[Lit, Lit]:
+        """(known, true) literals of ``atom`` after the chosen ``writers`` (sorted by id) have been
+        applied to the initial state."""
+        key = ("b", atom, tuple(writers))
+        if key in self._chain_cache:
+            return self._chain_cache[key]
+        init = self.facts.get(atom)
+        known: Lit = FALSE if init is None else TRUE
+        value: Lit = TRUE if init else FALSE
+        # value after writers = value of the last chosen writer, else the initial value
+        later: list[Lit] = []
+        true_parts: list[Lit] = []
+        for w, pol in reversed(writers):
+            xw = self.x[w]
+            last = self.m.and_of([xw] + [neg(l) for l in later], f"last({w},{atom})")
+            if pol:
+                true_parts.append(last)
+            later.append(xw)
+        none_chosen = self.m.and_of([neg(l) for l in later], f"none({atom})")
+        any_chosen = neg(none_chosen)
+        known_lit = self.m.or_of([known, any_chosen], f"known({atom})")
+        true_lit = self.m.or_of(true_parts + [self.m.and_of([none_chosen, value], f"init({atom})")], f"true({atom})")
+        self._chain_cache[key] = (known_lit, true_lit)
+        return known_lit, true_lit
+
+    def _bool_holds(self, atom: tuple, positive: bool, writers: list[tuple[int, bool]], name: str) -> Lit:
+        """Literal: the open-world test ``atom == positive`` holds after ``writers``."""
+        if not writers:
+            init = self.facts.get(atom)
+            return TRUE if init is None or init == positive else FALSE
+        known, true = self._bool_value(atom, writers)
+        return self.m.or_of([neg(known), true if positive else neg(true)], name)
+
+    def _num_holds(self, atom: tuple, op: str, bound: float, writers: list[tuple[int, str, float]], name: str) -> Lit:
+        """Literal: the open-world comparison ``atom op bound`` holds after ``writers``."""
+        init = self.values.get(atom)
+        if not writers:
+            if init is None:
+                return TRUE
+            return TRUE if _compare(init, op, bound) else FALSE
+        m = self.m
+        scaled = [(w, kind, round(amount * SCALE)) for w, kind, amount in writers]
+        span = sum(abs(a) for _, _, a in scaled) + abs(round((init or 0) * SCALE)) + 1
+        known: Lit = TRUE if init is not None else FALSE
+        prev_var: int | None = None
+        prev_const = round(init * SCALE) if init is not None else 0
+        for w, kind, amount in scaled:
+            xw = self.x[w]
+            nxt = m.new_int(f"val({atom})@{w}", -span, span)
+            m.records.append(Record("int_sel", (xw, known), nxt, extra=(prev_var, prev_const, amount, kind),
+                                    refs=() if prev_var is None else (prev_var,)))
+            known = m.or_of([known, xw], f"known({atom})@{w}")
+            prev_var = nxt
+        cur = prev_var
+        sat = m.new_bool(f"cmp({atom}{op}{bound})")
+        m.records.append(Record("cmp_eq", (sat,), cur, extra=(op, round(bound * SCALE))))
+        return m.or_of([neg(known), sat], name)
+
+    def _state_test(self, test: Test, decs: list[int], name: str) -> Lit:
+        """Literal for an achieve/context test evaluated after the chosen ``decs``."""
+        if isinstance(test, FactTest):
+            atom = (test.predicate, test.args)
+            return self._bool_holds(atom, test.positive, self._bool_writers(atom, decs), name)
+        if isinstance(test, ValueTest):
+            atom = (test.function, test.args)
+            return self._num_holds(atom, test.op, test.value, self._num_writers(atom, decs), name)
+        parts = [self._state_test(p, decs, name) for p in test.parts]
+        return self.m.and_of(parts, name) if isinstance(test, AllOf) else self.m.or_of(parts, name)
+
+    def _sorted(self, decs: Iterable[int]) -> list[int]:
+        return sorted(decs, key=lambda d: self.tg.vertices[d].content)
+
+    def _bool_writers(self, atom: tuple, decs: list[int]) -> list[tuple[int, bool]]:
+        out = []
+        for d in self._sorted(decs):
+            for key, val in self.effects[d].facts:
+                if key == atom:
+                    out.append((d, val))
+        return out
+
+    def _num_writers(self, atom: tuple, decs: list[int]) -> list[tuple[int, str, float]]:
+        out = []
+        for d in self._sorted(decs):
+            for key, kind, amount in self.effects[d].numeric:
+                if key == atom:
+                    out.append((d, kind, amount))
+        return out
+
+    # --- rules -------------------------------------------------------------------------------------
+    def _preceding(self, t: int) -> list[int]:
+        """Decompositions whose effects a task sees: those of the preceding siblings' subtrees
+        when its parent is a sequence (nothing flows into nested operators, §7.3)."""
+        tg = self.tg
+        p = tg.vertices[t].parent
+        if p < 0 or tg.vertices[p].content != ";":
+            return []
+        out: list[int] = []
+        for c in tg.children(p):
+            if c == t:
+                break
+            out.extend(self._subtree_decompositions(c))
+        return out
+
+    def _task_rules(self, t: int) -> None:
+        tg = self.tg
+        seen = self._preceding(t)
+        earlier = [d for d in self.x if self.queue_pos[tg.vertices[d].parent] < self.queue_pos[t]]
+        for dv in tg.decompositions_of(t):
+            d = dv.index
+            dec = dv.decomposition
+            for c in dec.predicates.preconditions:
+                if any(a.startswith("?") for a in c.args):
+                    continue
+                label = self._label(f"pre:{dec.id}:{c}", f"{dec.id}: precondition {_show(c)}")
+                if isinstance(c, Literal):
+                    atom = (c.predicate, c.args)
+                    ok = self._bool_holds(atom, c.positive, self._bool_writers(atom, seen), f"pre({dec.id})")
+                else:
+                    atom = (c.function, c.args)
+                    ok = self._num_holds(atom, c.op, c.value, self._num_writers(atom, seen), f"pre({dec.id})")
+                self.m.clause([neg(self.x[d]), ok], label)
+            self._robot_rules(d, earlier)
+
+    def _robot_rules(self, d: int, earlier: list[int]) -> None:
+        pre = robot_preconditions(self.domain, self.tg.vertices[d].decomposition)
+        if not pre:
+            return
+        dec = self.tg.vertices[d].decomposition
+        partners = [e for e in self._sorted(earlier)
+                    if e in self.ec.get(d, set()) and e not in self.seq_after.get(d, set())]
+        for lit in pre:
+            writers = []
+            for e in partners:
+                for eff in translate_robot_effects(self.domain, self.tg.vertices[e].decomposition, dec):
+                    if eff.predicate == lit.predicate and eff.args == lit.args:
+                        writers.append((e, eff.positive))
+            if not writers:
+                continue
+            # an unknown robot fact holds; a fact set by an earlier partner must agree
+            later: list[Lit] = []
+            for e, pol in reversed(writers):
+                if pol != lit.positive:
+                    self.m.clause([neg(self.x[d]), neg(self.x[e])] + later,
+                                  self._label(f"robot:{dec.id}:{lit}", f"{dec.id}: robot precondition {_show(lit)} "
+                                              f"contradicts the effect of {self.tg.vertices[e].content}"))
+                later.append(self.x[e])
+
+    def _conflicts(self, v: int) -> None:
+        """AND-parallel: no two chosen decompositions below ``v`` set a fact both ways."""
+        by_atom: dict[tuple, tuple[list[int], list[int]]] = {}
+        for d in self._subtree_decompositions(v):
+            for atom, val in self.effects[d].facts:
+                pos, negs = by_atom.setdefault(atom, ([], []))
+                (pos if val else negs).append(d)
+        for atom, (pos, negs) in sorted(by_atom.items()):
+            if not pos or not negs:
+                continue
+            label = self._label(f"conflict:{v}:{atom}", f"parallel tasks below {self.tg.vertices[v].related_goal or 'operator ' + str(v)} "
+                                f"set {atom[0]}({', '.join(atom[1])}) both true and false")
+            if len(pos) * len(negs) <= 16:
+                for a in pos:
+                    for b in negs:
+                        if self.tg.vertices[a].parent != self.tg.vertices[b].parent:
+                            self.m.clause([neg(self.x[a]), neg(self.x[b])], label)
+            else:
+                any_pos = self.m.or_of([self.x[a] for a in pos], f"anypos({atom})")
+                any_neg = self.m.or_of([self.x[b] for b in negs], f"anyneg({atom})")
+                self.m.clause([neg(any_pos), neg(any_neg)], label)
+
+    def _achieve(self, v: int, test: Test) -> None:
+        vx = self.tg.vertices[v]
+        holds = self._state_test(test, self._subtree_decompositions(v), f"achieve({vx.achieve_goal}@{v})")
+        self.m.clause([neg(self.active[v]), holds],
+                      self._label(f"achieve:{v}", f"achieve condition of goal {vx.achieve_goal}"))
+
+
+def _compare(value: float, op: str, bound: float) -> bool:
+    from ..conditions import compare
+
+    return compare(value, op, bound)
+
+
+def _show(c: Literal | Comparison) -> str:
+    if isinstance(c, Literal):
+        return f"{'' if c.positive else 'not '}{c.predicate}({', '.join(c.args)})"
+    return f"{c.function}({', '.join(c.args)}) {c.op} {c.value}"
