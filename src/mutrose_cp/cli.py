@@ -6,6 +6,7 @@ decomposition exits with 3; nothing here prints a Python traceback.
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import sys
 import time
@@ -14,7 +15,7 @@ from pathlib import Path
 from typing import Sequence
 
 from . import __version__
-from .errors import MissionError
+from .errors import MissionError, NoDecompositionError
 from .mission import Mission, find_mission_files, resolve_config_path
 
 
@@ -75,6 +76,70 @@ def cmd_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _costs(mission: Mission, path: str | None) -> dict[int, int]:
+    """Cost of each decomposition vertex: its number of actions, or the sum of per-action and
+    per-method costs from a JSON cost file ``{"actions": {name: cost}, "methods": {name: cost},
+    "default_action": 1}``."""
+    from .htn import TreeNode
+
+    actions: dict[str, int] = {}
+    methods: dict[str, int] = {}
+    default = 1
+    if path:
+        try:
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
+        except OSError as err:
+            raise MissionError(f"cannot read cost file: {err.strerror}", path) from None
+        except json.JSONDecodeError as err:
+            raise MissionError(f"invalid JSON: {err.msg}", f"{path}:{err.lineno}:{err.colno}") from None
+        if not isinstance(data, dict):
+            raise MissionError('expected an object {"actions": {...}, "methods": {...}}', path)
+        try:
+            actions = {str(k): int(v) for k, v in (data.get("actions") or {}).items()}
+            methods = {str(k): int(v) for k, v in (data.get("methods") or {}).items()}
+            default = int(data.get("default_action", 1))
+        except (TypeError, ValueError, AttributeError):
+            raise MissionError("costs must be integers: actions/methods map names to integers", path) from None
+
+    def method_cost(node: TreeNode) -> int:
+        own = methods.get(node.name, 0) if node.kind == "method" else 0
+        return own + sum(method_cost(c) for c in node.children)
+
+    out = {}
+    for d in mission.task_graph.decompositions():
+        dec = d.decomposition
+        out[d.index] = sum(actions.get(a.name, default) for a in dec.path.actions) + method_cost(dec.path.tree)
+    return out
+
+
+def _decompositions(args: argparse.Namespace, mission: Mission, progress) -> tuple[object, int, dict | None, str]:
+    """The mission decompositions to write, their total number, the space section and a note."""
+    if args.algorithm == "exploratory":
+        found = mission.exploratory(progress)
+        if not found:
+            raise NoDecompositionError("no valid mission decomposition")
+        return found, len(found), None, ""
+    from .solve.cpsat import explain, minimize
+
+    space = mission.decomposition_space(progress)
+    total = space.count
+    if total == 0:
+        reasons = explain(mission.encoding(explain=True)) if args.explain else []
+        detail = ("; ".join(reasons)) if reasons else "run with --explain to see the conflicting constraints"
+        raise NoDecompositionError(f"no valid mission decomposition: {detail}", str(mission.goal_model.source))
+    key = {d.index: f"t{i}" for i, d in enumerate(mission.task_graph.decompositions())}
+    section = {"count": str(total), "components": space.component_table(key.__getitem__)}
+    if args.optimize:
+        chosen, cost = minimize(mission.encoding(), _costs(mission, args.costs))
+        section["optimum"] = {"cost": str(cost), "decomposition": [key[d] for d in sorted(chosen)]}
+        return [sorted(chosen)], total, section, f", optimum cost {cost}"
+    if args.sample:
+        return space.sample(args.sample, args.seed), total, section, f", {args.sample} sampled (seed {args.seed})"
+    limit = None if args.limit == 0 else args.limit
+    listed = min(total, limit) if limit is not None else total
+    return itertools.islice(iter(space), limit), total, section, (f", first {listed} listed" if listed < total else "")
+
+
 def cmd_decompose(args: argparse.Namespace) -> int:
     from .output import OutputModel, write_output
 
@@ -84,36 +149,37 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     for w in mission.warnings:
         if not args.quiet:
             print(f"warning: {w}", file=sys.stderr)
-    progress = _Progress(not args.quiet, "mission decompositions: tasks visited")
+    label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
+    progress = _Progress(not args.quiet, f"mission decompositions: {label}")
     tg = mission.task_graph
     constraints = mission.constraints
-    decompositions = mission.exploratory(progress)
+    decompositions, total, section, note = _decompositions(args, mission, progress)
     if args.output:
         out_path = Path(args.output)
-    elif folder is not None:
-        out_path = resolve_config_path(mission.config.output.file_path, cfg)
-        if not Path(mission.config.output.file_path).is_absolute():
-            out_path = folder / mission.config.output.file_path
+    elif folder is not None and not Path(mission.config.output.file_path).is_absolute():
+        out_path = folder / mission.config.output.file_path
     else:
         out_path = mission.output_path()
     file_type = args.format or mission.config.output.file_type
-    model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state)
+    model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
+                        space=section)
     if args.ihtn:
         from .ihtn import write_ihtns
 
+        model.decompositions = list(decompositions)
         n_files = write_ihtns(model, Path(args.ihtn))
     else:
         n_files = 0
         write_output(model, out_path, file_type)
     elapsed = time.perf_counter() - start
-    kinds = Counter("FB" if c.kind == "FB" else c.kind for c in constraints)
+    kinds = Counter(c.kind for c in constraints)
     data = {
         "command": "decompose",
         "algorithm": args.algorithm,
         "task_instances": len(mission.expansion.instances),
         "task_decompositions": len(tg.decompositions()),
         "constraints": {k: kinds.get(k, 0) for k in ("SEQ", "FB", "EC")},
-        "mission_decompositions": len(decompositions),
+        "mission_decompositions": str(total),
         "output": str(args.ihtn) if args.ihtn else str(out_path),
         "ihtn_files": n_files,
         "seconds": round(elapsed, 3),
@@ -122,8 +188,21 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     _summary(args, data,
              f"decomposed: {data['task_instances']} task instances, {data['task_decompositions']} task "
              f"decompositions, constraints SEQ {kinds.get('SEQ', 0)} FB {kinds.get('FB', 0)} EC "
-             f"{kinds.get('EC', 0)}, {len(decompositions)} valid mission decompositions -> {where} "
-             f"({elapsed:.2f} s)")
+             f"{kinds.get('EC', 0)}, {total} valid mission decompositions{note} -> {where} ({elapsed:.2f} s)")
+    return 0
+
+
+def cmd_count(args: argparse.Namespace) -> int:
+    hddl, gm, cfg, _folder = _inputs(args)
+    start = time.perf_counter()
+    mission = Mission.load(hddl, gm, cfg)
+    space = mission.decomposition_space(_Progress(not args.quiet, "components solved"), keep=False)
+    total = space.count
+    elapsed = time.perf_counter() - start
+    _summary(args, {"command": "count", "mission_decompositions": str(total), "components": len(space.components),
+                    "seconds": round(elapsed, 3)},
+             f"counted: {len(space.components)} independent components ({elapsed:.2f} s)")
+    print(total)
     return 0
 
 
@@ -150,11 +229,24 @@ def build_parser() -> argparse.ArgumentParser:
     common(p)
     p.add_argument("-o", "--output", help="output file (overrides the configuration's output.file_path)")
     p.add_argument("--format", choices=("json", "xml"), help="output format (default: the configuration's)")
-    p.add_argument("--algorithm", choices=("exploratory",), default="exploratory",
-                   help="decomposition algorithm")
+    p.add_argument("--algorithm", choices=("cpsat", "exploratory"), default="cpsat",
+                   help="cpsat (default): solver-backed, factored; exploratory: the original's explicit combination")
+    p.add_argument("--limit", type=int, default=1000, metavar="K",
+                   help="cpsat: list the first K mission decompositions (0 = all; default 1000)")
+    p.add_argument("--sample", type=int, metavar="K", help="cpsat: list K decompositions drawn uniformly at random")
+    p.add_argument("--seed", type=int, default=0, help="random seed for --sample (default 0)")
+    p.add_argument("--optimize", action="store_true",
+                   help="cpsat: output the decomposition of least cost (fewest actions, or --costs)")
+    p.add_argument("--costs", metavar="FILE", help='JSON cost file {"actions": {...}, "methods": {...}}')
+    p.add_argument("--explain", action="store_true",
+                   help="cpsat: when no decomposition exists, name the conflicting goals, tasks and facts")
     p.add_argument("--ihtn", metavar="DIR", help="write one iHTN file per ordering of each valid decomposition "
                                                  "into DIR instead of the output file")
     p.set_defaults(func=cmd_decompose)
+
+    p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
+    common(p)
+    p.set_defaults(func=cmd_count)
     return parser
 
 

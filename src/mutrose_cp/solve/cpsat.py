@@ -201,7 +201,7 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
         return
     simple = _simple_choice(comp)
     if simple is not None:
-        chosen = [s & frozenset(comp.choice_vars) for s in simple]
+        chosen = sorted((s & frozenset(comp.choice_vars) for s in simple), key=sorted)
         comp.solutions, comp.count = chosen, len(chosen)
         return
     builder = CpBuilder(bm)
@@ -216,7 +216,8 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
     if status not in (cp_model.OPTIMAL, cp_model.FEASIBLE, cp_model.INFEASIBLE):
         raise RuntimeError(f"CP-SAT could not finish a component: {solver.StatusName(status)}")
     comp.count = collector.count
-    comp.solutions = collector.solutions if collector.keep else None
+    # a canonical order (by decomposition literal), independent of the solver's search
+    comp.solutions = sorted(collector.solutions, key=sorted) if collector.keep else None
 
 
 # ---------------------------------------------------------------------------------------------
