@@ -66,7 +66,7 @@ def test_every_reference_goal_model_parses(relative: str) -> None:
     assert gm.warnings == ()
     assert gm.node(gm.root).parent is None
     assert gm.dfs[0] == gm.root
-    assert sorted(gm.dfs) == sorted(n.id for n in gm.nodes)
+    assert sorted(gm.dfs) == sorted(n.key for n in gm.nodes)
     ids = [n.id for n in gm.nodes]
     for node in gm.nodes:
         assert node.kind in ("goal", "task")

@@ -174,11 +174,12 @@ def check_annotations(gm: GoalModel) -> list[Problem]:
                 leaves.append(a.name)
 
         collect(node.annotation)
-        if leaves != list(node.children):
+        child_ids = [gm.node(c).id for c in node.children]
+        if leaves != child_ids:
             problems.append(Problem(
                 _where_node(gm, node),
                 f"runtime annotation lists {', '.join(leaves)} but the children drawn left to right are "
-                f"{', '.join(node.children)}; children are used by position (left to right), so the "
+                f"{', '.join(child_ids)}; children are used by position (left to right), so the "
                 "annotation is read as if it named them; name every child once, in diagram order",
             ))
     return problems

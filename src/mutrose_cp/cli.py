@@ -114,6 +114,11 @@ def _costs(mission: Mission, path: str | None) -> dict[int, int]:
 
 def _decompositions(args: argparse.Namespace, mission: Mission, progress) -> tuple[object, int, dict | None, str]:
     """The mission decompositions to write, their total number, the space section and a note."""
+    if not mission.task_graph.tasks():
+        if not args.quiet:
+            print("warning: the mission has no task instances (no entity of the world matched its queries): "
+                  "nothing to decompose", file=sys.stderr)
+        return [], 0, ({"count": "0", "components": []} if args.algorithm == "cpsat" else None), ""
     if args.algorithm == "exploratory":
         found = mission.exploratory(progress)
         if not found:

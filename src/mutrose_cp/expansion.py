@@ -129,11 +129,11 @@ class _Walker:
             return self._task(node)
         if node.goal_type == "Query" and node.query is not None:
             self._resolve_query(node)
-            return RatNode(GOAL, node.id, node.id, var_maps=self._snapshot())
+            return RatNode(GOAL, node.id, node.key, var_maps=self._snapshot())
         if node.context is not None and node.context.kind == "trigger":
             self.events[depth] = node.context.text
         if not node.children:
-            return RatNode(GOAL, node.id, node.id, var_maps=self._snapshot())
+            return RatNode(GOAL, node.id, node.key, var_maps=self._snapshot())
         if node.forall is not None:
             return self._forall(node, depth)
         return self._expand(node, depth)
@@ -152,7 +152,7 @@ class _Walker:
         it_type = decl.type if decl is not None else ""
         elements = list(zip(iterated.value, iterated.records))
         if not elements:
-            return RatNode(GOAL, node.id, node.id, var_maps=self._snapshot())
+            return RatNode(GOAL, node.id, node.key, var_maps=self._snapshot())
         self.counters[depth] = 1
         copies: list[RatNode] = []
         for i, (value, record) in enumerate(elements):
@@ -168,7 +168,7 @@ class _Walker:
         children = [self.gm.node(c) for c in node.children]
         snapshot = self._snapshot()
         if len(children) == 1:
-            rat = RatNode(MEANSEND, node.id, node.id, [], node.group, node.divisible, node.or_decomposed, snapshot)
+            rat = RatNode(MEANSEND, node.id, node.key, [], node.group, node.divisible, node.or_decomposed, snapshot)
             rat.children.append(self.walk(children[0], depth + 1))
             return rat
         annotation: Annotation = node.annotation if isinstance(node.annotation, AnnotationOp) else AnnotationOp(
@@ -186,7 +186,7 @@ class _Walker:
                         f"runtime annotation names more children than the goal has ({a.name})", self._where(node)
                     )
                 return self.walk(queue.pop(0), depth + 1)
-            op = RatNode(OPERATOR, a.op, node.id, [], node.group, node.divisible, node.or_decomposed, snapshot,
+            op = RatNode(OPERATOR, a.op, node.key, [], node.group, node.divisible, node.or_decomposed, snapshot,
                          inner=inner)
             for c in a.children:
                 op.children.append(build(c, True))
@@ -229,7 +229,7 @@ class _Walker:
         events = () if sequential else tuple(self.events[d] for d in sorted(self.events))
         inst = TaskInstance(inst_id, node.id, name, robots, location, tuple(params), events)
         self.instances.append(inst)
-        return RatNode(TASK, inst_id, node.id, var_maps=self._snapshot())
+        return RatNode(TASK, inst_id, node.key, var_maps=self._snapshot())
 
 
 def expand(gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge) -> Expansion:

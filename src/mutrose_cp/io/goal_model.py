@@ -87,9 +87,16 @@ class GMNode:
     robot_number: RobotNumber | None = None
     annotation: Annotation | None = None  # None: no annotation / empty brackets
     task_name: str | None = None  # HDDL abstract task name (tasks only)
-    children: tuple[str, ...] = ()  # ids, left to right
+    children: tuple[str, ...] = ()  # keys, left to right
     parent: str | None = None
     or_decomposed: bool = False  # some child link is an OR refinement
+    # unique key: the id, or ``id#k`` for the k-th node reusing an id (ids are not checked for
+    # uniqueness by the original; the structure must still tell such nodes apart)
+    key: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.key:
+            object.__setattr__(self, "key", self.id)
 
 
 @dataclass(frozen=True)
@@ -102,13 +109,14 @@ class GoalModel:
 
     @cached_property
     def by_id(self) -> dict[str, GMNode]:
-        out: dict[str, GMNode] = {}
+        """Nodes by unique key; a plain id names the first node with that id."""
+        out: dict[str, GMNode] = {n.key: n for n in self.nodes}
         for n in self.nodes:
             out.setdefault(n.id, n)
         return out
 
-    def node(self, node_id: str) -> GMNode:
-        return self.by_id[node_id]
+    def node(self, key: str) -> GMNode:
+        return self.by_id[key]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -595,6 +603,11 @@ class _Reader:
                 dfs.append(v)
                 stack.extend(reversed(out_edges.get(v, [])))
 
+        keys: dict[int, str] = {}
+        seen_ids: dict[str, int] = {}
+        for v in order:
+            k = seen_ids[drafts[v].id] = seen_ids.get(drafts[v].id, 0) + 1
+            keys[v] = drafts[v].id if k == 1 else f"{drafts[v].id}#{k}"
         nodes: list[GMNode] = []
         for v in order:
             d = drafts[v]
@@ -606,8 +619,9 @@ class _Reader:
                     id=d.id,
                     kind=d.kind,
                     x=d.x,
-                    children=tuple(drafts[c].id for c in children),
-                    parent=drafts[parent[0]].id if parent else None,
+                    children=tuple(keys[c] for c in children),
+                    parent=keys[parent[0]] if parent else None,
+                    key=keys[v],
                     or_decomposed=v in or_decomposed,
                     **d.fields,
                 )
@@ -615,7 +629,7 @@ class _Reader:
         return GoalModel(
             source=self.source,
             nodes=tuple(nodes),
-            root=drafts[root].id,
-            dfs=tuple(drafts[v].id for v in dfs),
+            root=keys[root],
+            dfs=tuple(keys[v] for v in dfs),
             warnings=tuple(self.warnings),
         )

@@ -235,6 +235,8 @@ class DecompositionSpace:
 
     @property
     def count(self) -> int:
+        if not self.encoding.tasks:
+            return 0  # a mission without task instances decomposes into nothing
         return math.prod(c.count for c in self.components)
 
     def _decompositions(self, parts: Sequence[frozenset[int]]) -> list[int]:
@@ -250,7 +252,7 @@ class DecompositionSpace:
     def __iter__(self) -> Iterator[list[int]]:
         """All decompositions, in mixed-radix order over the components (last varies fastest)."""
         comps = self.components
-        if any(c.count == 0 for c in comps):
+        if not self.encoding.tasks or any(c.count == 0 for c in comps):
             return
         if any(c.solutions is None for c in comps):
             raise RuntimeError("a component has too many solutions to list; use count or sample")

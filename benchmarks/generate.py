@@ -1,0 +1,107 @@
+"""Generate scaled missions for the benchmarks.
+
+Each family reuses the HDDL domain, goal model and configuration of a reference mission (read
+from the reference corpus by path, never copied) and writes a world knowledge file of its own
+with ``n`` entities, every one of which produces decomposition work:
+
+* ``delivery``: food-logistics delivery, ``n`` deliveries, every patient able to fetch (so each
+  delivery has three alternative decompositions: 3^n valid mission decompositions);
+* ``pickup``: food-logistics pickup, ``n`` pickups, every patient able to open the door;
+* ``vital-signs``: ``n`` occupied rooms with two patients each (comma-separated list), with
+  varied conditions so that the three methods of CollectVitalSigns are all exercised.
+
+    python benchmarks/generate.py FAMILY N OUT_DIR   -> prints the configuration path
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", ROOT.parent / "shared" / "reference"))
+if not REFERENCE.is_absolute():
+    REFERENCE = (ROOT / REFERENCE).resolve()
+
+FAMILIES = {
+    # family: (reference folder, configuration template, goal model)
+    "delivery": ("scalability/food-logistics-delivery", "configurationDelivery1.json", "FoodLogisticsDelivery.txt"),
+    "pickup": ("scalability/food-logistics-pickup", "configurationPickup1.json", "FoodLogisticsPickup.txt"),
+    "vital-signs": ("missions/vital-signs-monitoring", "configuration.json", "VitalSignsMonitoring.txt"),
+}
+
+
+def delivery_world(n: int) -> str:
+    parts = ["<world_db>"]
+    for i in range(1, n + 1):
+        parts.append(f"<Delivery><name>Delivery{i}</name><patient>Patient{i}</patient>"
+                     f"<delivery_location>Location{i}</delivery_location></Delivery>")
+    for i in range(1, n + 1):
+        parts.append(f"<Location><name>Location{i}</name><patient>Patient{i}</patient></Location>")
+    parts.append("<Location><name>Kitchen</name><patient></patient></Location>")
+    for i in range(1, n + 1):
+        parts.append(f"<Patient><name>Patient{i}</name><can_fetch>true</can_fetch><can_open>true</can_open></Patient>")
+    parts.append("</world_db>")
+    return "\n".join(parts) + "\n"
+
+
+def pickup_world(n: int) -> str:
+    parts = ["<world_db>"]
+    for i in range(1, n + 1):
+        parts.append(f"<Pickup><name>Pickup{i}</name><patient>Patient{i}</patient>"
+                     f"<pickup_location>Location{i}</pickup_location></Pickup>")
+    for i in range(1, n + 1):
+        parts.append(f"<Location><name>Location{i}</name><patient>Patient{i}</patient></Location>")
+    parts.append("<Location><name>Kitchen</name><patient></patient></Location>")
+    for i in range(1, n + 1):
+        parts.append(f"<Patient><name>Patient{i}</name><can_fetch>true</can_fetch><can_open>true</can_open></Patient>")
+    parts.append("</world_db>")
+    return "\n".join(parts) + "\n"
+
+
+def vital_signs_world(n: int) -> str:
+    parts = ["<world_db>"]
+    for i in range(n):
+        parts.append(f"<Room><name>Room{i}</name><is_occupied>true</is_occupied>"
+                     f"<patients>Patient{2 * i + 1},Patient{2 * i + 2}</patients></Room>")
+    parts.append("<Room><name>SanitizationRoom</name><is_occupied>false</is_occupied><patients></patients></Room>")
+    for p in range(1, 2 * n + 1):
+        infectious, diabetes, surgical = p % 3 == 0, p % 3 == 1, p % 5 == 0
+        parts.append(f"<Patient><name>Patient{p}</name><infectious_disease>{str(infectious).lower()}</infectious_disease>"
+                     f"<diabetes>{str(diabetes).lower()}</diabetes><post_surgical>{str(surgical).lower()}</post_surgical>"
+                     f"<available>true</available><checked>false</checked></Patient>")
+    parts.append("</world_db>")
+    return "\n".join(parts) + "\n"
+
+
+WORLDS = {"delivery": delivery_world, "pickup": pickup_world, "vital-signs": vital_signs_world}
+
+
+def generate(family: str, n: int, out_dir: Path) -> tuple[Path, Path, Path]:
+    """Write the world and a configuration for it; return (hddl, goal model, configuration)."""
+    folder, template, gm_name = FAMILIES[family]
+    src = REFERENCE / folder
+    out_dir.mkdir(parents=True, exist_ok=True)
+    world = out_dir / f"{family}-{n}.xml"
+    world.write_text(WORLDS[family](n), encoding="utf-8")
+    config = json.loads((src / "configuration" / template).read_text(encoding="utf-8"))
+    config["world_db"]["path"] = str(world.resolve())
+    config["output"]["file_path"] = str((out_dir / f"{family}-{n}.out.json").resolve())
+    cfg = out_dir / f"{family}-{n}.json"
+    cfg.write_text(json.dumps(config, indent=2), encoding="utf-8")
+    hddl = next((src / "hddl").glob("*.hddl"))
+    return hddl, src / "gm" / gm_name, cfg
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 3 or argv[0] not in FAMILIES:
+        print(__doc__, file=sys.stderr)
+        return 2
+    hddl, gm, cfg = generate(argv[0], int(argv[1]), Path(argv[2]))
+    print(hddl, gm, cfg, sep="\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
