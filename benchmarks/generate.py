@@ -67,7 +67,8 @@ def vital_signs_world(n: int) -> str:
                      f"<patients>Patient{2 * i + 1},Patient{2 * i + 2}</patients></Room>")
     parts.append("<Room><name>SanitizationRoom</name><is_occupied>false</is_occupied><patients></patients></Room>")
     for p in range(1, 2 * n + 1):
-        infectious, diabetes, surgical = p % 3 == 0, p % 3 == 1, p % 5 == 0
+        # every patient has one condition that some CollectVitalSigns method handles
+        infectious, diabetes, surgical = p % 3 == 0, p % 3 == 1, p % 3 == 2 or p % 5 == 0
         parts.append(f"<Patient><name>Patient{p}</name><infectious_disease>{str(infectious).lower()}</infectious_disease>"
                      f"<diabetes>{str(diabetes).lower()}</diabetes><post_surgical>{str(surgical).lower()}</post_surgical>"
                      f"<available>true</available><checked>false</checked></Patient>")
