@@ -71,8 +71,13 @@ def _pairs(kind: str, x: _Child, y: _Child) -> list[tuple[int, int]]:
     return out
 
 
-def _tree_constraints(tg: TaskGraph, v: int) -> list[Constraint]:
-    """The constraint list of the operator subtree rooted at ``v`` (§6.1)."""
+def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constraint]:
+    """The constraint list of the operator subtree rooted at ``v`` (§6.1).
+
+    Parallel pairs only matter when a sequential or fallback ancestor fans out over their
+    endpoints, or when a context dependency turns one into SEQ (§6.2).  Otherwise they would be
+    dropped anyway, and there are quadratically many of them (every pair of forAll instances),
+    so ``pairs_needed=False`` skips generating them: the result is the same."""
     vx = tg.vertices[v]
     kind = {";": SEQ, "FALLBACK": FB}.get(vx.content, PAR)
     children: list[_Child] = []
@@ -81,9 +86,11 @@ def _tree_constraints(tg: TaskGraph, v: int) -> list[Constraint]:
         if ux.kind == ATASK:
             children.append(u)
         elif ux.kind == OP:
-            children.append(_tree_constraints(tg, u))
+            children.append(_tree_constraints(tg, u, pairs_needed or kind != PAR))
     pairs: list[tuple[int, int]] = []
-    if kind == PAR:
+    if kind == PAR and not pairs_needed:
+        combos = []
+    elif kind == PAR:
         combos = [(i, j) for i in range(len(children)) for j in range(i + 1, len(children))]
     else:
         combos = [(i, i + 1) for i in range(len(children) - 1)]
@@ -189,7 +196,8 @@ def generate_constraints(tg: TaskGraph) -> list[Constraint]:
         root = tg.vertices[0]
         if root.kind != OP:
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
-        out = _to_decompositions(tg, _tree_constraints(tg, 0))
+        has_cd = any(d["type"] == CD for _, _, d in tg.graph.edges(data=True))
+        out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd))
     out += _execution_constraints(tg)
     out = _trim(out)
     _check_robot_numbers(tg, out)
