@@ -174,6 +174,15 @@ class Encoder:
         self.or_lits: dict[tuple[int, int], Lit] = {}
         self.labels: dict[str, str] = {}
         self._chain_cache: dict = {}
+        self._subtree: dict[int, list[int]] = {}
+        order = sorted(self.effects, key=lambda d: tg.vertices[d].content)
+        self.bool_writers: dict[tuple, list[tuple[int, bool]]] = {}
+        self.num_writers: dict[tuple, list[tuple[int, str, float]]] = {}
+        for d in order:  # writers of each atom, in decomposition-id order (the original's map order)
+            for key, val in self.effects[d].facts:
+                self.bool_writers.setdefault(key, []).append((d, val))
+            for key, kind, amount in self.effects[d].numeric:
+                self.num_writers.setdefault(key, []).append((d, kind, amount))
 
     # ------------------------------------------------------------------------------------------
     def encode(self) -> Encoding:
@@ -261,16 +270,13 @@ class Encoder:
                 self._choices(c, active)
 
     def _subtree_decompositions(self, v: int) -> list[int]:
-        tg = self.tg
-        out, stack = [], [v]
-        while stack:
-            u = stack.pop()
-            ux = tg.vertices[u]
-            if ux.kind == ATASK:
-                out.extend(d.index for d in tg.decompositions_of(u))
+        if v not in self._subtree:
+            tg = self.tg
+            if tg.vertices[v].kind == ATASK:
+                self._subtree[v] = [d.index for d in tg.decompositions_of(v)]
             else:
-                stack.extend(tg.children(u))
-        return out
+                self._subtree[v] = [d for c in tg.children(v) for d in self._subtree_decompositions(c)]
+        return self._subtree[v]
 
     # --- world values ------------------------------------------------------------------------------
     def _bool_value(self, atom: tuple, writers: list[tuple[int, bool]]) -> tuple[Lit, Lit]:
@@ -331,7 +337,7 @@ class Encoder:
         m.records.append(Record("cmp_eq", (sat,), cur, extra=(op, round(bound * SCALE))))
         return m.or_of([neg(known), sat], name)
 
-    def _state_test(self, test: Test, decs: list[int], name: str) -> Lit:
+    def _state_test(self, test: Test, decs: set[int], name: str) -> Lit:
         """Literal for an achieve/context test evaluated after the chosen ``decs``."""
         if isinstance(test, FactTest):
             atom = (test.predicate, test.args)
@@ -345,41 +351,30 @@ class Encoder:
     def _sorted(self, decs: Iterable[int]) -> list[int]:
         return sorted(decs, key=lambda d: self.tg.vertices[d].content)
 
-    def _bool_writers(self, atom: tuple, decs: list[int]) -> list[tuple[int, bool]]:
-        out = []
-        for d in self._sorted(decs):
-            for key, val in self.effects[d].facts:
-                if key == atom:
-                    out.append((d, val))
-        return out
+    def _bool_writers(self, atom: tuple, decs: set[int]) -> list[tuple[int, bool]]:
+        return [w for w in self.bool_writers.get(atom, ()) if w[0] in decs]
 
-    def _num_writers(self, atom: tuple, decs: list[int]) -> list[tuple[int, str, float]]:
-        out = []
-        for d in self._sorted(decs):
-            for key, kind, amount in self.effects[d].numeric:
-                if key == atom:
-                    out.append((d, kind, amount))
-        return out
+    def _num_writers(self, atom: tuple, decs: set[int]) -> list[tuple[int, str, float]]:
+        return [w for w in self.num_writers.get(atom, ()) if w[0] in decs]
 
     # --- rules -------------------------------------------------------------------------------------
-    def _preceding(self, t: int) -> list[int]:
+    def _preceding(self, t: int) -> set[int]:
         """Decompositions whose effects a task sees: those of the preceding siblings' subtrees
         when its parent is a sequence (nothing flows into nested operators, §7.3)."""
         tg = self.tg
         p = tg.vertices[t].parent
         if p < 0 or tg.vertices[p].content != ";":
-            return []
-        out: list[int] = []
+            return set()
+        out: set[int] = set()
         for c in tg.children(p):
             if c == t:
                 break
-            out.extend(self._subtree_decompositions(c))
+            out.update(self._subtree_decompositions(c))
         return out
 
     def _task_rules(self, t: int) -> None:
         tg = self.tg
         seen = self._preceding(t)
-        earlier = [d for d in self.x if self.queue_pos[tg.vertices[d].parent] < self.queue_pos[t]]
         for dv in tg.decompositions_of(t):
             d = dv.index
             dec = dv.decomposition
@@ -394,15 +389,19 @@ class Encoder:
                     atom = (c.function, c.args)
                     ok = self._num_holds(atom, c.op, c.value, self._num_writers(atom, seen), f"pre({dec.id})")
                 self.m.clause([neg(self.x[d]), ok], label)
-            self._robot_rules(d, earlier)
+            self._robot_rules(d, t)
 
-    def _robot_rules(self, d: int, earlier: list[int]) -> None:
+    def _robot_rules(self, d: int, t: int) -> None:
+        """Robot preconditions against the effects of execution-constrained partners visited
+        earlier that do not have to follow ``d``."""
         pre = robot_preconditions(self.domain, self.tg.vertices[d].decomposition)
         if not pre:
             return
-        dec = self.tg.vertices[d].decomposition
-        partners = [e for e in self._sorted(earlier)
-                    if e in self.ec.get(d, set()) and e not in self.seq_after.get(d, set())]
+        tg = self.tg
+        dec = tg.vertices[d].decomposition
+        partners = [e for e in self._sorted(self.ec.get(d, ()))
+                    if self.queue_pos[tg.vertices[e].parent] < self.queue_pos[t]
+                    and e not in self.seq_after.get(d, set())]
         for lit in pre:
             writers = []
             for e in partners:
@@ -423,7 +422,7 @@ class Encoder:
     def _conflicts(self, v: int) -> None:
         """AND-parallel: no two chosen decompositions below ``v`` set a fact both ways."""
         by_atom: dict[tuple, tuple[list[int], list[int]]] = {}
-        for d in self._subtree_decompositions(v):
+        for d in sorted(self._subtree_decompositions(v)):
             for atom, val in self.effects[d].facts:
                 pos, negs = by_atom.setdefault(atom, ([], []))
                 (pos if val else negs).append(d)
@@ -443,10 +442,33 @@ class Encoder:
                 self.m.clause([neg(any_pos), neg(any_neg)], label)
 
     def _achieve(self, v: int, test: Test) -> None:
+        """The operator's achieve condition must hold when it is active.  A conjunction is
+        posted part by part (one per forAll element), so independent instances stay in
+        independent components."""
         vx = self.tg.vertices[v]
-        holds = self._state_test(test, self._subtree_decompositions(v), f"achieve({vx.achieve_goal}@{v})")
-        self.m.clause([neg(self.active[v]), holds],
-                      self._label(f"achieve:{v}", f"achieve condition of goal {vx.achieve_goal}"))
+        decs = set(self._subtree_decompositions(v))
+        parts = list(_conjuncts(test))
+        for i, part in enumerate(parts):
+            holds = self._state_test(part, decs, f"achieve({vx.achieve_goal}@{v})")
+            self.m.clause([neg(self.active[v]), holds],
+                          self._label(f"achieve:{v}:{i}", f"achieve condition of goal {vx.achieve_goal}: {_show_test(part)}"))
+
+
+def _conjuncts(test: Test) -> Iterable[Test]:
+    if isinstance(test, AllOf):
+        for p in test.parts:
+            yield from _conjuncts(p)
+    else:
+        yield test
+
+
+def _show_test(test: Test) -> str:
+    if isinstance(test, FactTest):
+        return f"{'' if test.positive else 'not '}{test.predicate}({', '.join(test.args)})"
+    if isinstance(test, ValueTest):
+        return f"{test.function}({', '.join(test.args)}) {test.op} {test.value:g}"
+    joiner = " and " if isinstance(test, AllOf) else " or "
+    return "(" + joiner.join(_show_test(p) for p in test.parts) + ")"
 
 
 def _compare(value: float, op: str, bound: float) -> bool:

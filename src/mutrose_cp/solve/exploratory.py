@@ -12,7 +12,7 @@ from typing import Callable
 
 from ..conditions import holds
 from ..constraints import EC, SEQ, Constraint
-from ..errors import NoDecompositionError
+from ..errors import NoDecompositionError, Problem
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Domain
@@ -53,7 +53,8 @@ class ExploratoryDecomposer:
         for key, value in initial.functions:
             values.setdefault(key, value)
         self.initial = State(facts, values)
-        self.vmds: list[_VMD] = []
+        self.vmds: list[_VMD] = [_VMD([], set())]  # one empty partial decomposition to extend
+        self.failures: list[str] = []  # why partial decompositions were dropped, first first
         self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
         self.by_id = {d.content: d.index for d in tg.decompositions()}
         self.ec_partners: dict[int, set[int]] = {}
@@ -77,7 +78,17 @@ class ExploratoryDecomposer:
         self.pos = 0
         while self.pos < len(self.queue):
             self._visit({})
+        if not self.vmds and self.failures:
+            raise NoDecompositionError([Problem("", f) for f in list(dict.fromkeys(self.failures))[:5]])
         return [m.order for m in self.vmds]
+
+    def _dropped_all(self, reason: str) -> None:
+        """Record why the last partial decompositions of a branch were dropped.
+
+        The original aborts the whole run at the first task without a valid decomposition;
+        here only the affected decompositions are dropped (an OR alternative may still
+        succeed), and the run fails only when nothing is left (docs/deviations.md)."""
+        self.failures.append(reason)
 
     def _unique_branch(self) -> list[list[int]]:
         """§7.7: every decomposition valid in the initial state is its own decomposition."""
@@ -121,6 +132,7 @@ class ExploratoryDecomposer:
             while self._front_is_child_of(v.index):
                 E.update(self._visit({}))
             if v.content == "#":
+                self._current_op = v.index
                 self._solve_conflicts(E)
         test = achieve_test(v, self.gm, self.config)
         if test is not None:
@@ -132,11 +144,9 @@ class ExploratoryDecomposer:
                         state.apply(E[key])
                 if holds(test, state.fact, state.value):
                     kept.append(m)
-            if not kept:
-                raise NoDecompositionError(
-                    f"No decomposition satisfied achieve condition of goal {v.achieve_goal}",
-                    f"{self.gm.source}: goal {v.achieve_goal}",
-                )
+            if not kept and self.vmds:
+                self._dropped_all(f"{self.gm.source}: goal {v.achieve_goal}: No decomposition satisfied achieve "
+                                  f"condition of goal {v.achieve_goal}")
             self.vmds = kept
         return E
 
@@ -157,9 +167,10 @@ class ExploratoryDecomposer:
                     break
             if ok:
                 kept.append(m)
-        if not kept:
-            raise NoDecompositionError("Could not solve conflicts in valid mission decompositions generation: "
-                                       "every combination of parallel tasks sets some fact both true and false")
+        if not kept and self.vmds:
+            self._dropped_all("Could not solve conflicts in valid mission decompositions generation: every "
+                              "combination of the parallel tasks below "
+                              f"{self.tg.vertices[self._current_op].related_goal} sets some fact both true and false")
         self.vmds = kept
 
     def _robot_ok(self, d: int, members: set[str]) -> bool:
@@ -185,18 +196,6 @@ class ExploratoryDecomposer:
     def _task(self, v: Vertex, effects_in: dict[str, Effects]) -> dict[str, Effects]:
         decs = self.tg.decompositions_of(v.index)
         accepted: dict[str, Effects] = {}
-        if not self.vmds:
-            for d in decs:
-                if ground_preconditions_hold(d.decomposition, self.initial) and self._robot_ok(d.index, set()):
-                    self.vmds.append(_VMD([d.index], {d.content}))
-                    accepted[d.content] = self.effects[d.index]
-            if not self.vmds:
-                raise NoDecompositionError(
-                    f"NO VALID DECOMPOSITIONS FOR TASK {v.content}: {v.instance.name} "
-                    "(no decomposition's preconditions hold in the initial world state)",
-                    f"task instance {v.content}",
-                )
-            return accepted
         emitted: list[_VMD] = []
         for m in self.vmds:
             work = set(m.ids)
@@ -211,12 +210,11 @@ class ExploratoryDecomposer:
                     continue
                 emitted.append(_VMD(m.order + [d.index], work | {d.content}))
                 accepted[d.content] = self.effects[d.index]
-        if not emitted:
-            raise NoDecompositionError(
-                f"NO VALID DECOMPOSITIONS FOR TASK {v.content}: {v.instance.name} "
-                "(in every mission decomposition built so far, each of its decompositions has a precondition "
-                "that the world state contradicts)",
-                f"task instance {v.content}",
+        if not emitted and self.vmds:
+            self._dropped_all(
+                f"task instance {v.content}: NO VALID DECOMPOSITIONS FOR TASK {v.content}: {v.instance.name} "
+                "(each of its decompositions has a precondition that the world state contradicts; run "
+                "`decompose --explain` to see which)"
             )
         self.vmds = emitted
         return accepted
