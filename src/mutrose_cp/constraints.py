@@ -137,7 +137,7 @@ def _execution_constraints(tg: TaskGraph) -> list[Constraint]:
             if (t, s) in done:
                 continue
             done.add((s, t))
-            flags = tg.graph.edges[s, t]
+            flags = tg.edge(s, t)
             for ds in _decompositions(tg, s):
                 for dt in _decompositions(tg, t):
                     out.append(Constraint(EC, ds, dt, flags.get("group", True), flags.get("divisible", True)))
@@ -196,7 +196,7 @@ def generate_constraints(tg: TaskGraph) -> list[Constraint]:
         root = tg.vertices[0]
         if root.kind != OP:
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
-        has_cd = any(d["type"] == CD for _, _, d in tg.graph.edges(data=True))
+        has_cd = any(d["type"] == CD for _, _, d in tg.edges())
         out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd))
     out += _execution_constraints(tg)
     out = _trim(out)

@@ -8,7 +8,7 @@ constraints (EC).  The graph is built from the runtime annotation tree, then red
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Iterator, Mapping
 
 import networkx as nx
 
@@ -56,30 +56,69 @@ class Vertex:
 
 @dataclass
 class TaskGraph:
-    """Vertices in index order and a networkx digraph over their indices (edge attr ``type``)."""
+    """Vertices in index order and typed edges (``AND``, ``OR``, ``CD``, ``EC``).
+
+    Edges are kept in plain adjacency lists, in insertion order (which the original's
+    traversals depend on); :attr:`graph` gives the same graph as a networkx ``DiGraph`` for
+    analysis and drawing.  Large missions have hundreds of thousands of EC edges, and building
+    them directly in networkx doubled the time of the whole pipeline."""
 
     vertices: list[Vertex] = field(default_factory=list)
-    graph: nx.DiGraph = field(default_factory=nx.DiGraph)
     unique_branch: bool = False
+    _succ: dict[int, list[tuple[int, str]]] = field(default_factory=dict)
+    _by_kind: dict[tuple[int, str], list[int]] = field(default_factory=dict)
+    _edges: dict[tuple[int, int], dict] = field(default_factory=dict)  # (a, b) -> {"type": .., flags}
 
     def add(self, vertex: Vertex) -> Vertex:
         vertex.index = len(self.vertices)
         self.vertices.append(vertex)
-        self.graph.add_node(vertex.index)
+        self._succ[vertex.index] = []
         return vertex
 
     def add_edge(self, a: int, b: int, kind: str, **flags) -> None:
-        self.graph.add_edge(a, b, type=kind, **flags)
+        old = self._edges.get((a, b))
+        if old is None:
+            self._succ[a].append((b, kind))
+            self._by_kind.setdefault((a, kind), []).append(b)
+        elif old["type"] != kind:
+            self._succ[a] = [(u, kind if u == b else k) for u, k in self._succ[a]]
+            self._by_kind[(a, old["type"])].remove(b)
+            self._by_kind.setdefault((a, kind), []).append(b)
+        self._edges[(a, b)] = {"type": kind, **flags}
+
+    def has_edge(self, a: int, b: int) -> bool:
+        return (a, b) in self._edges
+
+    def edge(self, a: int, b: int) -> dict:
+        return self._edges[(a, b)]
+
+    def edges(self) -> Iterator[tuple[int, int, dict]]:
+        """All edges, by source vertex and then insertion order."""
+        for a in range(len(self.vertices)):
+            for b, _k in self._succ[a]:
+                yield a, b, self._edges[(a, b)]
+
+    @property
+    def graph(self) -> nx.DiGraph:
+        """The Task Graph as a networkx ``DiGraph`` (vertex attribute ``vertex``, edge ``type``)."""
+        g = nx.DiGraph()
+        for v in self.vertices:
+            g.add_node(v.index, vertex=v)
+        for a, b, d in self.edges():
+            g.add_edge(a, b, **d)
+        return g
 
     def out(self, v: int, *kinds: str) -> list[int]:
         """Successors of ``v`` through edges of the given types, in insertion order."""
-        return [u for u, d in self.graph.adj[v].items() if d["type"] in kinds]
+        if len(kinds) == 1:
+            return self._by_kind.get((v, kinds[0]), [])
+        return [u for u, k in self._succ[v] if k in kinds]
 
     def children(self, v: int) -> list[int]:
         return self.out(v, AND, OR)
 
     def edge_type(self, a: int, b: int) -> str:
-        return self.graph.edges[a, b]["type"]
+        return self._edges[(a, b)]["type"]
 
     def decompositions(self) -> list[Vertex]:
         return [v for v in self.vertices if v.kind == DECOMPOSITION]
@@ -91,7 +130,7 @@ class TaskGraph:
         return [self.vertices[u] for u in self.out(task, AND) if self.vertices[u].kind == DECOMPOSITION]
 
     def is_or(self, v: int) -> bool:
-        return any(d["type"] == OR for d in self.graph.adj[v].values())
+        return any(k == OR for _, k in self._succ[v])
 
 
 class _Builder:
@@ -239,12 +278,12 @@ def _final_context_edges(tg: TaskGraph, cd_edges: list[tuple[int, int]]) -> None
             v = stack.pop()
             if tg.vertices[v].kind == ATASK:
                 targets.append(v)
-            for u in reversed(list(tg.graph.adj[v])):
+            for u, _k in reversed(tg._succ[v]):
                 if u not in seen:
                     seen.add(u)
                     stack.append(u)
         for t in sorted(targets):
-            if not tg.graph.has_edge(d, t):
+            if not tg.has_edge(d, t):
                 tg.add_edge(d, t, CD)
 
 
@@ -282,7 +321,7 @@ def _execution_constraint_edges(tg: TaskGraph) -> None:
         elif vx.kind == ATASK and active is not None:
             group, divisible = flags[active]
             for t in sorted(cur):
-                if not tg.graph.has_edge(t, v) and not tg.graph.has_edge(v, t):
+                if not tg.has_edge(t, v) and not tg.has_edge(v, t):
                     tg.add_edge(t, v, EC, group=group, divisible=divisible)
                     tg.add_edge(v, t, EC, group=group, divisible=divisible)
             cur.append(v)
@@ -344,9 +383,10 @@ def _trim(tg: TaskGraph) -> TaskGraph:
             insert_tasks(v, v)
         else:
             insert_tasks(v, kept_ancestor(v))
-    for a, b, d in tg.graph.edges(data=True):
+    for a, b, d in list(tg.edges()):
         if d["type"] in (CD, EC) and a in index and b in index:
-            new.graph.add_edge(index[a], index[b], **d)
+            flags = {k: v for k, v in d.items() if k != "type"}
+            new.add_edge(index[a], index[b], d["type"], **flags)
     return new
 
 
