@@ -206,8 +206,10 @@ def cmd_count(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "count", "mission_decompositions": str(total), "components": len(space.components),
                     "seconds": round(elapsed, 3)},
-             f"counted: {len(space.components)} independent components ({elapsed:.2f} s)")
-    print(total)
+             f"counted: {total} valid mission decompositions in {len(space.components)} independent components "
+             f"({elapsed:.2f} s)")
+    sys.stderr.flush()
+    print(total)  # the bare count is the last line of stdout
     return 0
 
 
