@@ -72,8 +72,11 @@ class ExploratoryDecomposer:
         """All valid mission decompositions, each as decomposition vertices in mission order."""
         if self.tg.unique_branch:
             return self._unique_branch()
-        self.queue = [v.index for v in self.tg.vertices
-                      if v.kind == ATASK or (v.kind == OP and (len(self.tg.children(v.index)) >= 2 or v.is_achieve_type))]
+        # every vertex of the trimmed Task Graph that is a task or an operator: trimming keeps
+        # only operators with two or more children (or an achieve condition), but an operator
+        # whose children were goal leaves (queries) can be left with fewer; it still scopes
+        # its subtree (the original then visits that subtree outside its parent operator)
+        self.queue = [v.index for v in self.tg.vertices if v.kind in (ATASK, OP)]
         self.total = len(self.queue)
         self.pos = 0
         while self.pos < len(self.queue):
