@@ -286,11 +286,56 @@ class DecompositionSpace:
         return table
 
 
+def _signature(bm: BoolModel, comp: Component) -> tuple[tuple, list[int]]:
+    """A key equal for components that are the same up to renaming their variables (one per
+    delivery or room of a forAll), and the variables in canonical order."""
+    canon: dict[int, int] = {}
+
+    def cid(v: int) -> int:
+        if v not in canon:
+            canon[v] = len(canon)
+        return canon[v]
+
+    def lit(l):
+        if isinstance(l, int):
+            return cid(abs(l)) if l > 0 else -cid(abs(l)) - 1_000_000
+        return l
+
+    parts = []
+    for r in comp.records:
+        extra = r.extra
+        if r.kind == "int_sel":
+            prev, const, amount, kind = extra
+            extra = (None if prev is None else cid(prev), const, amount, kind)
+        ints = tuple((bm.ints[abs(v)].lo, bm.ints[abs(v)].hi) for v in r.variables() if abs(v) in bm.ints)
+        parts.append((r.kind, tuple(lit(l) for l in r.lits), lit(r.target), extra, ints))
+    order = sorted(canon, key=canon.__getitem__)
+    key = (tuple(parts), tuple(canon[v] for v in comp.choice_vars if v in canon))
+    return key, order
+
+
 def build_space(enc: Encoding, queue_order: Mapping[int, int], keep: bool = True,
                 progress: Callable[[int, int], None] | None = None) -> DecompositionSpace:
     comps = _components(enc)
+    # components that are identical up to renaming (one per forAll instance) are solved once
+    solved: dict[tuple, tuple[list[int], Component]] = {}
     for i, comp in enumerate(comps):
-        solve_component(enc.model, comp, keep)
+        if comp.count == 0 and comp.solutions == []:
+            pass
+        elif len(comp.records) > 1:
+            key, order = _signature(enc.model, comp)
+            hit = solved.get(key)
+            if hit is None:
+                solve_component(enc.model, comp, keep)
+                solved[key] = (order, comp)
+            else:
+                first_order, first = hit
+                rename = dict(zip(first_order, order))
+                comp.count = first.count
+                comp.solutions = (None if first.solutions is None else
+                                  sorted((frozenset(rename[v] for v in sol) for sol in first.solutions), key=sorted))
+        else:
+            solve_component(enc.model, comp, keep)
         if progress is not None:
             progress(i + 1, len(comps))
     var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
