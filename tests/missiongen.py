@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import json
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Union
 
@@ -150,7 +150,6 @@ class MissionSpec:
     query_active: bool  # select(r:Room | r.active) or select(r:Room | ) (every room)
     forall_condition: str  # the part after '|' of the forAll ("" for none)
     tree: GoalNode  # the forAll goal's refinement (G3 itself)
-    _texts: dict = field(default=None, compare=False, hash=False, repr=False)  # type: ignore[assignment]
 
     # -- derived ---------------------------------------------------------------------------------
     @property
@@ -409,10 +408,23 @@ def render_gm(spec: MissionSpec) -> str:
 # Strategies
 
 
-def _literals(room_preds: tuple[str, ...], robot_preds: tuple[str, ...], max_size: int):
-    atoms = [(p, "?rm") for p in room_preds] + [(p, "?r") for p in robot_preds]
-    lit = st.builds(lambda a, pos: Lit(a[0], a[1], pos), st.sampled_from(atoms), st.booleans())
-    return st.lists(lit, max_size=max_size, unique_by=lambda l: (l.pred, l.var))
+def _atoms(room_preds: tuple[str, ...], robot_preds: tuple[str, ...]) -> list[tuple[str, str]]:
+    return [(p, "?rm") for p in room_preds] + [(p, "?r") for p in robot_preds]
+
+
+def _literals(room_preds: tuple[str, ...], robot_preds: tuple[str, ...], sizes: tuple[int, ...],
+              positive_bias: bool = False):
+    """Lists of literals on distinct atoms; the size is drawn from ``sizes`` (shrinks to the
+    first); with ``positive_bias`` three out of four literals are positive."""
+    polarity = st.sampled_from([True, True, True, False]) if positive_bias else st.booleans()
+    lit = st.builds(lambda a, pos: Lit(a[0], a[1], pos), st.sampled_from(_atoms(room_preds, robot_preds)), polarity)
+
+    @st.composite
+    def draw_list(draw):
+        n = draw(st.sampled_from(sizes))
+        return draw(st.lists(lit, min_size=n, max_size=n, unique_by=lambda l: (l.pred, l.var)))
+
+    return draw_list()
 
 
 NUMERIC_PRECONDITIONS = (Cmp(">", 0), Cmp("=", 1), Cmp("=", 0), Cmp(">", 1))
@@ -420,12 +432,12 @@ NUMERIC_PRECONDITIONS = (Cmp(">", 0), Cmp("=", 1), Cmp("=", 0), Cmp(">", 1))
 
 @st.composite
 def _action(draw, name: str, room_preds, robot_preds) -> Action:
-    pre = draw(_literals(room_preds, robot_preds, 2))
-    eff: list = draw(_literals(room_preds, robot_preds, 2))
+    pre = draw(_literals(room_preds, robot_preds, (0, 0, 0, 1, 1, 2)))
+    eff: list = draw(_literals(room_preds, robot_preds, (1, 0, 1, 2), positive_bias=True))
     change = draw(st.sampled_from([None, None, "increase", "decrease"]))
     if change:
         eff.append(Change(change))
-    if draw(st.integers(0, 5)) == 0:  # occasionally a numeric action precondition too
+    if draw(st.integers(0, 7)) == 0:  # occasionally a numeric action precondition too
         pre.append(draw(st.sampled_from(NUMERIC_PRECONDITIONS)))
     return Action(name, tuple(pre), tuple(eff))
 
@@ -438,17 +450,33 @@ def _method_paths(m: Method, bounds: dict[str, int]) -> int:
 
 
 @st.composite
+def _method_precondition(draw, switch: Lit, room_preds, robot_preds) -> list:
+    """A method precondition: none, the task's switch literal or its negation (so that methods
+    complement each other, as in real domains), random literals, or a numeric test."""
+    kind = draw(st.integers(-1, 5))
+    if kind <= 0:
+        return []
+    if kind == 1:
+        return [switch]
+    if kind == 2:
+        return [Lit(switch.pred, switch.var, not switch.positive)]
+    if kind == 3:
+        return draw(_literals(room_preds, robot_preds, (1, 2)))
+    if kind == 4:
+        return [draw(st.sampled_from(NUMERIC_PRECONDITIONS))]
+    return draw(_literals(room_preds, robot_preds, (1,))) + [draw(st.sampled_from(NUMERIC_PRECONDITIONS))]
+
+
+@st.composite
 def _task(draw, name: str, actions: tuple[Action, ...], earlier: tuple[Task, ...], bounds: dict[str, int],
           room_preds, robot_preds) -> Task:
     n_methods = draw(st.integers(1, 3))
+    switch = draw(_literals(room_preds, (), (1,)))[0]
     methods = []
     budget = MAX_PATHS
     for k in range(n_methods):
         remaining_methods = n_methods - k - 1
-        pre = draw(_literals(room_preds, robot_preds, 2))
-        numeric = draw(st.sampled_from((None, None) + NUMERIC_PRECONDITIONS))
-        if numeric is not None:
-            pre.append(numeric)
+        pre = draw(_method_precondition(switch, room_preds, robot_preds))
         callees = [a.name for a in actions] + [t.name for t in earlier]
         subtasks = draw(st.lists(st.sampled_from(callees), min_size=1, max_size=2))
         ordered = draw(st.integers(0, 3)) != 0
@@ -490,8 +518,12 @@ def _goal(draw, budget: int, depth: int, task_names: tuple[str, ...], room_preds
     used = 0
     for i in range(k):
         child_budget = budget - used - (k - i - 1)
-        nest = depth < MAX_DEPTH - 1 and draw(st.integers(0, 3 if k >= 2 else 5)) != 0 if k >= 2 else (
-            depth < MAX_DEPTH - 1 and draw(st.integers(0, 5)) == 0)
+        if depth >= MAX_DEPTH - 1:
+            nest = False
+        elif k >= 2:
+            nest = draw(st.integers(0, 3)) != 0  # mostly a subgoal (often a means-end goal)
+        else:
+            nest = draw(st.integers(0, 5)) == 0  # rarely a means-end goal over a subgoal
         if nest:
             child: Node = draw(_goal(child_budget, depth + 1, task_names, room_preds))
         else:
@@ -504,7 +536,7 @@ def _goal(draw, budget: int, depth: int, task_names: tuple[str, ...], room_preds
     group, divisible = (False, True) if flag == 0 else (True, False) if flag == 1 else (True, True)
     condition = achieve = None
     if not top:
-        extra = draw(st.integers(0, 9))
+        extra = draw(st.integers(0, 14))
         pred = draw(st.sampled_from(room_preds))
         if extra == 0:
             condition = f"current_room.{_attr(pred)}"
@@ -533,7 +565,7 @@ def missions(draw) -> MissionSpec:
     n_rooms = draw(st.integers(1, 3))
     rooms = []
     for i in range(n_rooms):
-        active = draw(st.integers(0, 3)) != 3
+        active = draw(st.integers(0, 7)) != 7
         facts = tuple((p, draw(st.sampled_from([False, True, None]))) for p in room_preds)
         level = draw(st.sampled_from([0, 1, 2, None]))
         rooms.append(Room(f"Room{i + 1}", active, facts, level))

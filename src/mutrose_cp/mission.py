@@ -153,8 +153,7 @@ class Mission:
         """The valid mission decompositions as a product of independently solved components."""
         from .solve.cpsat import build_space
 
-        return build_space(self.encoding(), {d.index: d.index for d in self.task_graph.decompositions()},
-                           keep=keep, progress=progress)
+        return build_space(self.encoding(), keep=keep, progress=progress)
 
     def decomposition_model(self):
         """The whole decomposition space as one CP-SAT model, for embedding (see ``api.py``)."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import os
+import re
 import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -51,7 +52,12 @@ def atomic_writer(path: str | os.PathLike, mode: str = "w") -> Iterator[IO]:
 # Boost-compatible JSON
 
 
+_PLAIN = re.compile(r'[ !#-.0-\[\]-~]*')  # printable ASCII except " / \\
+
+
 def _escape(s: str) -> str:
+    if _PLAIN.fullmatch(s):
+        return '"' + s + '"'
     out = []
     for ch in s:
         o = ord(ch)
@@ -257,11 +263,14 @@ class OutputBuilder:
         write_boost_json([self.constraint_entry(c) for c in self.m.constraints], fh, 4)
         fh.write(",\n    \"mission_decompositions\": ")
         first = True
+        quoted = {i: f'            "{k}"' for i, k in self.key.items()}  # keys need no escaping
         for md in self.m.decompositions:
             fh.write("[\n" if first else ",\n")
             first = False
-            fh.write(" " * 8)
-            write_boost_json([self.key[i] for i in md], fh, 8)
+            if md:
+                fh.write("        [\n" + ",\n".join(quoted[i] for i in md) + "\n        ]")
+            else:
+                fh.write('        ""')
         fh.write('""' if first else "\n    ]")
         if self.m.space is not None:
             fh.write(",\n    \"mission_decomposition_space\": ")

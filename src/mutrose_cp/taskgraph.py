@@ -115,7 +115,12 @@ class TaskGraph:
         return [u for u, k in self._succ[v] if k in kinds]
 
     def children(self, v: int) -> list[int]:
-        return self.out(v, AND, OR)
+        """AND/OR successors in insertion order (a vertex refines into one kind only)."""
+        ands = self._by_kind.get((v, AND))
+        ors = self._by_kind.get((v, OR))
+        if ands and ors:
+            return self.out(v, AND, OR)
+        return ands or ors or []
 
     def edge_type(self, a: int, b: int) -> str:
         return self._edges[(a, b)]["type"]

@@ -10,9 +10,11 @@ read off directly.
 """
 from __future__ import annotations
 
+import itertools
 import math
 import random
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Callable, Iterator, Mapping, Sequence
 
 from ortools.sat.python import cp_model
@@ -230,7 +232,6 @@ class DecompositionSpace:
 
     encoding: Encoding
     components: list[Component]
-    queue_order: dict[int, int]  # decomposition vertex -> position for listing
     var_to_dec: dict[int, int] = field(default_factory=dict)
 
     @property
@@ -242,9 +243,9 @@ class DecompositionSpace:
     def _decompositions(self, parts: Sequence[frozenset[int]]) -> list[int]:
         decs = [self.var_to_dec[v] for p in parts for v in p]
         decs += self.fixed
-        return sorted(decs, key=self.queue_order.__getitem__)
+        return sorted(decs)  # vertex order is the mission-queue order
 
-    @property
+    @cached_property
     def fixed(self) -> list[int]:
         """Decompositions chosen in every solution through constant literals."""
         return [d for d, lit in self.encoding.decomposition_lit.items() if lit == TRUE]
@@ -256,9 +257,13 @@ class DecompositionSpace:
             return
         if any(c.solutions is None for c in comps):
             raise RuntimeError("a component has too many solutions to list; use count or sample")
+        # each component's solutions as decomposition vertices, once; a listed decomposition is
+        # then the sorted concatenation of one choice per component
+        choices = [[tuple(self.var_to_dec[v] for v in sol) for sol in c.solutions] for c in comps]  # type: ignore[union-attr]
+        fixed = tuple(self.fixed)
         idx = [0] * len(comps)
         while True:
-            yield self._decompositions([c.solutions[i] for c, i in zip(comps, idx)])  # type: ignore[index]
+            yield sorted(itertools.chain(fixed, *(ch[i] for ch, i in zip(choices, idx))))
             k = len(comps) - 1
             while k >= 0:
                 idx[k] += 1
@@ -277,11 +282,22 @@ class DecompositionSpace:
             out.append(self._decompositions([rng.choice(c.solutions) for c in self.components]))  # type: ignore[arg-type]
         return out
 
+    def minimize(self, costs: Mapping[int, int]) -> tuple[list[int], int] | None:
+        """A least-cost decomposition for an additive cost: each component's cheapest solution
+        (ties broken by the canonical order), or None when a component was not listed."""
+        if any(c.solutions is None for c in self.components) or self.count == 0:
+            return None
+        parts = []
+        for c in self.components:
+            parts.append(min(c.solutions, key=lambda s: (sum(costs.get(self.var_to_dec[v], 0) for v in s), sorted(s))))  # type: ignore[union-attr]
+        chosen = self._decompositions(parts)
+        return chosen, sum(costs.get(d, 0) for d in chosen)
+
     def component_table(self, key: Callable[[int], str]) -> list[dict]:
         """Per component: its alternative sets of task decompositions (by output key)."""
         table = []
         for c in self.components:
-            alts = [sorted((self.var_to_dec[v] for v in s), key=self.queue_order.__getitem__) for s in c.solutions or []]
+            alts = [sorted(self.var_to_dec[v] for v in s) for s in c.solutions or []]
             table.append({"count": str(c.count), "alternatives": [[key(d) for d in a] for a in alts]})
         return table
 
@@ -314,7 +330,7 @@ def _signature(bm: BoolModel, comp: Component) -> tuple[tuple, list[int]]:
     return key, order
 
 
-def build_space(enc: Encoding, queue_order: Mapping[int, int], keep: bool = True,
+def build_space(enc: Encoding, keep: bool = True,
                 progress: Callable[[int, int], None] | None = None) -> DecompositionSpace:
     comps = _components(enc)
     # components that are identical up to renaming (one per forAll instance) are solved once
@@ -340,7 +356,7 @@ def build_space(enc: Encoding, queue_order: Mapping[int, int], keep: bool = True
             progress(i + 1, len(comps))
     var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
     # components without decomposition literals only constrain (e.g. all-constant checks)
-    return DecompositionSpace(enc, [c for c in comps if c.choice_vars or c.count == 0], dict(queue_order), var_to_dec)
+    return DecompositionSpace(enc, [c for c in comps if c.choice_vars or c.count == 0], var_to_dec)
 
 
 def minimize(enc: Encoding, costs: Mapping[int, int]) -> tuple[list[int], int]:
