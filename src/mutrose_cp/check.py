@@ -7,14 +7,24 @@ once, and robot numbers can be inferred.  Every problem is collected, none stops
 """
 from __future__ import annotations
 
+import difflib
+from typing import Iterable
+
 from .errors import Problem
 from .io.config import Configuration
 from .io.goal_model import GMNode, GoalModel
 from .io.hddl import Domain
+from .query import select_problems
 
 
 def _where_node(gm: GoalModel, node: GMNode) -> str:
     return f"{gm.source}: {'goal' if node.kind == 'goal' else 'task'} {node.id}"
+
+
+def _did_you_mean(name: str, candidates: Iterable[str], lead: str = "; did you mean ") -> str:
+    """``; did you mean X?`` (or ``lead`` X?) for a close candidate, else nothing."""
+    close = difflib.get_close_matches(name, list(dict.fromkeys(candidates)), n=1, cutoff=0.75)
+    return f"{lead}{close[0]}?" if close else ""
 
 
 def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[Problem]:
@@ -27,7 +37,7 @@ def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[P
             controlled.setdefault(decl.name, decl.type)
     gm_tasks = {n.id: n for n in gm.nodes if n.kind == "task"}
     for i, vm in enumerate(config.var_mapping):
-        where = vm.where or f"{src}: var_mapping[{i}]"
+        where = config.locate(vm.where or f"var_mapping[{i}]")
         node = gm_tasks.get(vm.task_id)
         if node is None:
             problems.append(Problem(where, f"task_id {vm.task_id} is not a task of the goal model "
@@ -35,31 +45,43 @@ def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[P
             continue
         task = domain.task_by_name.get(node.task_name or "")
         if task is None:
-            problems.append(Problem(where, f"Could not find AT {node.task_name} from variable mappings in HDDL AT's"))
+            problems.append(Problem(where, f"Could not find AT {node.task_name} from variable mappings in HDDL AT's: "
+                                           f"task_id {vm.task_id} is the goal-model task '{node.text}', whose "
+                                           "name must be an abstract task of the HDDL domain"))
             continue
         params = {p.name: p.type for p in task.parameters}
+        listing = ", ".join(f"{n} - {t}" for n, t in params.items())
         for j, (gm_var, hddl_var) in enumerate(vm.pairs):
             if gm_var not in controlled:
                 continue  # the original checks only mappings of controlled variables
             if hddl_var not in params:
                 problems.append(Problem(f"{where}.map[{j}]", f"Could not find variable {hddl_var} in AT "
-                                        f"{task.name} definition (parameters: {', '.join(params)})"))
+                                        f"{task.name} definition: set hddl_var to one of its parameters "
+                                        f"({listing}){_did_you_mean(hddl_var, params)}"))
                 continue
             ocl = controlled[gm_var]
             expected = config.type_mapping.get(ocl)
             if expected != params[hddl_var]:
+                fitting = [n for n, t in params.items() if t == expected]
+                fix = (f"map {gm_var} to {' or '.join(fitting)}" if fitting else
+                       f"map {gm_var} to a parameter of HDDL type {expected}" if expected else
+                       f"add a type_mapping entry for {ocl}")
                 problems.append(Problem(
                     f"{where}.map[{j}]",
                     f"Type error in AT: {task.name}: {gm_var} has OCL type {ocl} mapped to HDDL type "
-                    f"{expected or '(no type_mapping entry)'}, but {hddl_var} is a {params[hddl_var]}",
+                    f"{expected or '(no type_mapping entry)'}, but {hddl_var} is a {params[hddl_var]}: {fix}",
                 ))
     declared_types = set(controlled.values())
+    declared_list = ", ".join(sorted(declared_types)) or "none"
     for t in config.location_types:
         if t not in declared_types:
             problems.append(Problem(f"{src}: location_types",
-                                    f"High-level location type [{t}] was not declared in the Goal Model"))
+                                    f"High-level location type [{t}] was not declared in the Goal Model: "
+                                    f"declare a variable of type {t} in the Controls of a goal, or remove "
+                                    f"{t} from location_types (types declared in the goal model: "
+                                    f"{declared_list}){_did_you_mean(t, declared_types)}"))
     for i, m in enumerate(config.semantic_mapping):
-        where = m.where or f"{src}: semantic_mapping[{i}]"
+        where = config.locate(m.where or f"semantic_mapping[{i}]")
         if m.mapped_type != "predicate":
             continue
         if m.type == "attribute":
@@ -67,15 +89,16 @@ def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[P
                 continue
             if m.relates_to not in declared_types:
                 problems.append(Problem(where, f"Could not find in GM relation type [{m.relates_to}] declared in "
-                                               "semantic mappings"))
+                                               "semantic mappings: relates_to must be a type declared in the "
+                                               f"Controls of a goal ({declared_list})"
+                                               f"{_did_you_mean(m.relates_to, declared_types)}"))
             if m.predicate_type is not None and "SEQUENCE" not in m.relates_to.upper():
                 problems.append(Problem(where, "Cannot have attribute predicate_type for semantic mapping with "
                                                f"relation type [{m.relates_to}]"))
             decls = [d for d in domain.predicate_declarations(m.pred)
                      if tuple(p.type for p in d.parameters) == m.arg_sorts]
             if not decls:
-                problems.append(Problem(where, f"Could not find predicate [{m.pred}] declared in semantic mappings "
-                                               f"with argument sorts ({' '.join(m.arg_sorts)})"))
+                problems.append(Problem(where, _missing_predicate(domain, m.pred, m.arg_sorts)))
             elif len(m.arg_sorts) != 1:
                 problems.append(Problem(where, f"Cannot map predicate [{m.pred}] with {len(m.arg_sorts)} arguments "
                                                f"to relation type {m.relates_to}"))
@@ -86,8 +109,7 @@ def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[P
             decls = [d for d in domain.predicate_declarations(m.pred)
                      if tuple(p.type for p in d.parameters) == m.arg_sorts]
             if not decls:
-                problems.append(Problem(where, f"Could not find predicate [{m.pred}] declared in semantic mappings "
-                                               f"with argument sorts ({' '.join(m.arg_sorts)})"))
+                problems.append(Problem(where, _missing_predicate(domain, m.pred, m.arg_sorts)))
                 continue
             if len(m.arg_sorts) != 2:
                 problems.append(Problem(where, f"Wrong number of arguments in predicate of {m.type} type mapping"))
@@ -99,59 +121,95 @@ def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[P
                     problems.append(Problem(where, f"Cannot map predicate [{m.pred}] with argument of type {sort} "
                                                    f"to {label} type {ocl}"))
         else:
-            problems.append(Problem(where, f"No mapping type [{m.type}] for semantic mappings."))
+            problems.append(Problem(where, f"No mapping type [{m.type}] for semantic mappings. Use attribute, "
+                                           "ownership or relationship."))
     return problems
+
+
+def _missing_predicate(domain: Domain, pred: str, arg_sorts: tuple[str, ...]) -> str:
+    message = (f"Could not find predicate [{pred}] declared in semantic mappings with argument sorts "
+               f"({' '.join(arg_sorts)})")
+    declared = domain.predicate_declarations(pred)
+    if declared:
+        forms = " or ".join("(" + " ".join([pred, *(p.type for p in d.parameters)]) + ")" for d in declared)
+        return f"{message}: the domain declares {forms}; make map.arg_sorts list the same sorts"
+    return (f"{message}: declare ({pred} ...) in the :predicates of the HDDL domain or fix map.pred"
+            f"{_did_you_mean(pred, (d.name for d in domain.predicates))}")
 
 
 def check_gm_validity(domain: Domain, gm: GoalModel) -> list[Problem]:
     """§10.3 of goal-model.md: declarations before use, no redeclaration, goal-type rules."""
     problems: list[Problem] = []
     declared: dict[str, str] = {}
+    declared_in: dict[str, str] = {}
     for nid in gm.dfs:
         node = gm.node(nid)
         where = _where_node(gm, node)
         for decl in node.monitors:
             if decl.name not in declared:
+                close = _did_you_mean(decl.name, declared, "Did you mean ")
+                fix = ("declare it in the Controls of a goal visited earlier (an ancestor, or a goal to the "
+                       "left of one) or fix the name in Monitors")
                 problems.append(Problem(where, f"Undeclared variable [{decl.name}] of type [{decl.type}] in goal "
-                                               f"{node.id}: declare it in the Controls of a goal visited earlier"))
+                                               f"{node.id}: {close + ' Otherwise ' if close else ''}{fix}"))
         if node.forall is not None:
             if node.forall.iterated not in {d.name for d in node.monitors}:
                 problems.append(Problem(where, f"Did not find iterated variable {node.forall.iterated} in "
-                                               f"{node.id}'s monitored variables list"))
+                                               f"{node.id}'s monitored variables list: add it to the Monitors of "
+                                               f"{node.id}"))
             if node.forall.iteration not in {d.name for d in node.controls}:
                 problems.append(Problem(where, f"Did not find iteration variable {node.forall.iteration} in "
-                                               f"{node.id}'s controlled variables list"))
+                                               f"{node.id}'s controlled variables list: add it to the Controls of "
+                                               f"{node.id}, e.g. {node.forall.iteration} : <element type>"))
         for decl in node.controls:
             if decl.name in declared:
-                problems.append(Problem(where, f"Redeclaration of variable [{decl.name}] in goal {node.id}"))
+                problems.append(Problem(where, f"Redeclaration of variable [{decl.name}] in goal {node.id}: it is "
+                                               f"already controlled by {declared_in[decl.name]}; a variable is "
+                                               f"declared once, so rename it here (or list it in Monitors to use "
+                                               "the existing one)"))
             else:
                 declared[decl.name] = decl.type
+                declared_in[decl.name] = node.id
         if node.kind == "goal":
             if node.goal_type == "Query":
+                for message in select_problems(node.query) if node.query is not None else ():
+                    problems.append(Problem(where, f"Invalid query in Goal {node.id}: {message}"))
                 if not node.controls:
-                    problems.append(Problem(where, f"No controlled variable was declared for Query goal [{node.id}]"))
+                    problems.append(Problem(where, f"No controlled variable was declared for Query goal [{node.id}]: "
+                                                   "add Controls naming the variable that receives the query result, "
+                                                   "e.g. rooms : Sequence(Room)"))
                 elif node.query is not None and node.query.type != node.controls[0].base_type:
                     problems.append(Problem(where, f"Query variable [{node.query.variable}] type [{node.query.type}] "
                                                    "is different than the base type of the first controlled "
-                                                   f"variable [{node.controls[0].name} : {node.controls[0].type}]"))
+                                                   f"variable [{node.controls[0].name} : {node.controls[0].type}]: "
+                                                   "the first Controls variable receives the selected records, so "
+                                                   "their types must agree"))
                 elif node.query is None:
-                    problems.append(Problem(where, f"Missing select statement in Query Goal [{node.id}]"))
+                    problems.append(Problem(where, f"Missing select statement in Query Goal [{node.id}]: add a "
+                                                   "QueriedProperty such as world_db->select(r:Room | r.is_clean)"))
             if node.goal_type != "Achieve" and node.achieve_text:
-                problems.append(Problem(where, f"Goal of type {node.goal_type} cannot contain an Achieve Condition"))
+                problems.append(Problem(where, f"Goal of type {node.goal_type} cannot contain an Achieve Condition: "
+                                               "set its GoalType to Achieve or remove the AchieveCondition"))
             if node.goal_type != "Query" and node.query is not None:
-                problems.append(Problem(where, f"Goal of type {node.goal_type} cannot contain a Queried Property"))
+                problems.append(Problem(where, f"Goal of type {node.goal_type} cannot contain a Queried Property: "
+                                               "set its GoalType to Query or remove the QueriedProperty"))
             if node.or_decomposed and node.annotation is not None and getattr(node.annotation, "op", "#") != "#":
                 kind = "sequential" if node.annotation.op == ";" else "fallback"
-                problems.append(Problem(where, f"OR decomposed goal cannot have {kind} runtime annotations"))
+                problems.append(Problem(where, f"OR decomposed goal cannot have {kind} runtime annotations: the "
+                                               "children of an OR refinement are alternatives; drop the "
+                                               "annotation or separate them with #"))
         else:
             if node.task_name not in domain.task_by_name:
-                problems.append(Problem(where, f"Could not find AT [{node.task_name}] in HDDL Domain definition "
-                                               f"(abstract tasks: {', '.join(t.name for t in domain.tasks)})"))
+                problems.append(Problem(where, f"Could not find AT [{node.task_name}] in HDDL Domain definition: "
+                                               "the name after 'ATk:' must be an abstract task (:task) of the "
+                                               f"domain ({', '.join(t.name for t in domain.tasks) or 'none'})"
+                                               f"{_did_you_mean(node.task_name or '', domain.task_by_name)}"))
             elif node.robot_number is None:
                 task = domain.task_by_name[node.task_name]
                 if any(p.type == "robotteam" for p in task.parameters):
                     problems.append(Problem(where, "Tasks without RobotNumber attribute cannot have robotteam "
-                                                   "variable! Give the task a RobotNumber such as [2,4]"))
+                                                   f"variable! {node.task_name} has a robotteam parameter: give "
+                                                   "the task a RobotNumber such as [2,4]"))
     return problems
 
 

@@ -15,7 +15,7 @@ from .taskgraph import AND, ATASK, CD, EC, OP, OR, TaskGraph
 SEQ, FB, PAR = "SEQ", "FB", "PAR"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Constraint:
     """``kind`` between two vertices (tasks while generating, decompositions when final)."""
 
@@ -133,14 +133,13 @@ def _execution_constraints(tg: TaskGraph) -> list[Constraint]:
     out: list[Constraint] = []
     done: set[tuple[int, int]] = set()
     for s in (v.index for v in tg.tasks()):
-        for t in tg.out(s, EC):
+        for t, group, divisible in tg.ec_partners(s):
             if (t, s) in done:
                 continue
             done.add((s, t))
-            flags = tg.edge(s, t)
             for ds in _decompositions(tg, s):
                 for dt in _decompositions(tg, t):
-                    out.append(Constraint(EC, ds, dt, flags.get("group", True), flags.get("divisible", True)))
+                    out.append(Constraint(EC, ds, dt, group, divisible))
     return out
 
 

@@ -296,6 +296,45 @@ def _members(attr: str, values: frozenset[str]) -> _Filter:
     return _Filter(lambda x: field_text(x, attr) in values, (attr, values))
 
 
+def select_problems(select: Select) -> list[str]:
+    """Problems of ``select`` that do not depend on the world, so that ``check`` reports them
+    up front, located in the goal model (``run_select`` raises the same ones at expansion).
+    Each message says what is wrong and how to fix it."""
+    problems: list[str] = []
+
+    def visit(cond: Condition) -> None:
+        if isinstance(cond, BoolOp):
+            for c in cond.children:
+                visit(c)
+            return
+        text = cond.text.strip()
+        m_in = _IN.search(text)
+        m_op = _OPERATOR.search(text)
+        if m_in is not None and (m_op is None or m_in.start() < m_op.start()):
+            right = text[m_in.end():].strip()
+            if right.split(".", 1)[0] == select.variable and right.count(".") != 1:
+                problems.append(
+                    "The in operator for ownership relations currently only accepts a variable "
+                    f"direct attribute ([var].[attr]): write [{text[: m_in.start()].strip()} in "
+                    f"{select.variable}.<attribute>]"
+                )
+            return
+        if m_op is None:
+            return
+        op = m_op.group()
+        if op == "<>":
+            problems.append(
+                f"operator <> is not supported in select conditions ([{text}]): test equality with = "
+                "or a boolean field with !x.attr"
+            )
+        elif op in (">", "<") and _DIGITS.search(text[m_op.end():]) is None:
+            problems.append(f"no number after {op} in [{text}]: compare with a number, e.g. x.attr {op} 2")
+
+    if select.condition is not None:
+        visit(select.condition)
+    return problems
+
+
 def run_select(
     select: Select, knowledge: WorldKnowledge, bindings: Mapping[str, Binding], goal_id: str
 ) -> list[Element]:

@@ -244,12 +244,17 @@ def goal_model_dot(mission: "Mission", rankdir: str = "LR") -> str:
     its result; forAll goals in purple with one branch per iterated element, labelled with the
     element); operators are small ellipses (``;`` sequence, ``#`` parallel, ``FALLBACK``,
     ``OR`` for an OR-refined goal, whose edges are dashed); task instances are green boxes with
-    their instance id, HDDL task and location.  Node ids: the task instance id (``AT1_2``),
+    their instance id, HDDL task and location (grey and dashed when a false condition context
+    removed them from the Task Graph).  Node ids: the task instance id (``AT1_2``),
     goal ids with their forAll position (``G4_2``), ``<goal>.op`` for a goal's operator and
     ``<goal>.forall`` for a forAll goal."""
     exp = mission.expansion
     gm = mission.goal_model
     instances = {i.id: i for i in exp.instances}
+    try:
+        kept: set[str] | None = {v.content for v in mission.task_graph.tasks()}
+    except MissionError:
+        kept = None  # the Task Graph cannot be built: draw the expansion only
     dot = _new_graph("goal_model", rankdir, None, nodesep="0.15", ranksep="0.3")
 
     def goal_node(key: str, suffix: str, var_maps: Mapping[str, object], hub: bool = False) -> str:
@@ -282,7 +287,13 @@ def goal_model_dot(mission: "Mission", rankdir: str = "LR") -> str:
                 if robots:
                     lines.append(robots)
             node_id = dot.unique(node.content)
-            dot.node(node_id, shape="box", label=_label(lines), **_filled(TASK_COLOURS))
+            if kept is not None and node.content not in kept:
+                # a false condition context that nothing enables removed this branch
+                lines.append("removed: context is false")
+                dot.node(node_id, shape="box", label=_label(lines), fontcolor="#666666",
+                         **_filled(("#eeeeee", "#999999"), "filled,dashed"))
+            else:
+                dot.node(node_id, shape="box", label=_label(lines), **_filled(TASK_COLOURS))
             link(parent, node_id, alternative)
             return
         if node.kind == GOAL:

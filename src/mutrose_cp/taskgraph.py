@@ -68,12 +68,29 @@ class TaskGraph:
     _succ: dict[int, list[tuple[int, str]]] = field(default_factory=dict)
     _by_kind: dict[tuple[int, str], list[int]] = field(default_factory=dict)
     _edges: dict[tuple[int, int], dict] = field(default_factory=dict)  # (a, b) -> {"type": .., flags}
+    # execution constraints are symmetric and numerous: task -> [(partner, group, divisible)]
+    _ec: dict[int, list[tuple[int, bool, bool]]] = field(default_factory=dict)
+    _ec_pairs: set[tuple[int, int]] = field(default_factory=set)
+    _decs: dict[int, list[Vertex]] = field(default_factory=dict)
 
     def add(self, vertex: Vertex) -> Vertex:
         vertex.index = len(self.vertices)
         self.vertices.append(vertex)
         self._succ[vertex.index] = []
+        if vertex.kind == DECOMPOSITION:
+            self._decs.setdefault(vertex.parent, []).append(vertex)
         return vertex
+
+    def add_ec(self, a: int, b: int, group: bool, divisible: bool) -> None:
+        """An execution constraint between task vertices ``a`` and ``b`` (both directions)."""
+        self._ec.setdefault(a, []).append((b, group, divisible))
+        self._ec.setdefault(b, []).append((a, group, divisible))
+        self._ec_pairs.add((a, b))
+        self._ec_pairs.add((b, a))
+
+    def ec_partners(self, v: int) -> list[tuple[int, bool, bool]]:
+        """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
+        return self._ec.get(v, [])
 
     def add_edge(self, a: int, b: int, kind: str, **flags) -> None:
         old = self._edges.get((a, b))
@@ -87,16 +104,15 @@ class TaskGraph:
         self._edges[(a, b)] = {"type": kind, **flags}
 
     def has_edge(self, a: int, b: int) -> bool:
-        return (a, b) in self._edges
-
-    def edge(self, a: int, b: int) -> dict:
-        return self._edges[(a, b)]
+        return (a, b) in self._edges or (a, b) in self._ec_pairs
 
     def edges(self) -> Iterator[tuple[int, int, dict]]:
-        """All edges, by source vertex and then insertion order."""
+        """All edges (EC ones in both directions), by source vertex and then insertion order."""
         for a in range(len(self.vertices)):
             for b, _k in self._succ[a]:
                 yield a, b, self._edges[(a, b)]
+            for b, group, divisible in self._ec.get(a, ()):
+                yield a, b, {"type": EC, "group": group, "divisible": divisible}
 
     @property
     def graph(self) -> nx.DiGraph:
@@ -132,7 +148,7 @@ class TaskGraph:
         return [v for v in self.vertices if v.kind == ATASK]
 
     def decompositions_of(self, task: int) -> list[Vertex]:
-        return [self.vertices[u] for u in self.out(task, AND) if self.vertices[u].kind == DECOMPOSITION]
+        return self._decs.get(task, [])
 
     def is_or(self, v: int) -> bool:
         return any(k == OR for _, k in self._succ[v])
@@ -326,9 +342,8 @@ def _execution_constraint_edges(tg: TaskGraph) -> None:
         elif vx.kind == ATASK and active is not None:
             group, divisible = flags[active]
             for t in sorted(cur):
-                if not tg.has_edge(t, v) and not tg.has_edge(v, t):
-                    tg.add_edge(t, v, EC, group=group, divisible=divisible)
-                    tg.add_edge(v, t, EC, group=group, divisible=divisible)
+                if (t, v) not in tg._ec_pairs:
+                    tg.add_ec(t, v, group, divisible)
             cur.append(v)
 
 
@@ -388,10 +403,16 @@ def _trim(tg: TaskGraph) -> TaskGraph:
             insert_tasks(v, v)
         else:
             insert_tasks(v, kept_ancestor(v))
-    for a, b, d in list(tg.edges()):
-        if d["type"] in (CD, EC) and a in index and b in index:
-            flags = {k: v for k, v in d.items() if k != "type"}
-            new.add_edge(index[a], index[b], d["type"], **flags)
+    for a in range(len(tg.vertices)):
+        if a not in index:
+            continue
+        for b, kind in tg._succ[a]:
+            if kind == CD and b in index:
+                new.add_edge(index[a], index[b], CD)
+        for b, group, divisible in tg._ec.get(a, ()):  # each direction keeps its own order
+            if b in index:
+                new._ec.setdefault(index[a], []).append((index[b], group, divisible))
+                new._ec_pairs.add((index[a], index[b]))
     return new
 
 

@@ -165,7 +165,9 @@ def _missing_id(knowledge: WorldKnowledge, el: etree._Element) -> None:
     raise MissionError(Problem(
         located(knowledge.source, el.sourceline),
         f"element <{el.tag}> is a type-mapped record but has no <{knowledge.unique_id}> child "
-        f"(its unique id); do not use a mapped type name as a plain field tag",
+        f"(its unique id); do not use a mapped type name as a plain field tag: every <{el.tag}> "
+        f"element is read as a {el.tag} record (type_mapping), so give it a <{knowledge.unique_id}> "
+        f"child or rename the field",
     ))
 
 

@@ -5,6 +5,7 @@ Every key the original reads is kept; problems are located by key path
 """
 from __future__ import annotations
 
+import difflib
 import json
 import os
 from dataclasses import dataclass
@@ -14,7 +15,15 @@ from typing import Any
 from lxml import etree
 
 from ..errors import MissionError, Problem, located
-from .knowledge import element_children, parse_tolerant_xml, read_bytes, text_of
+from .knowledge import (
+    element_children,
+    hinted,
+    json_depth_problem,
+    json_syntax_problem,
+    parse_tolerant_xml,
+    read_bytes,
+    text_of,
+)
 
 
 @dataclass(frozen=True)
@@ -115,7 +124,9 @@ def parse_configuration_json(text: str, source: str) -> Configuration:
     try:
         data = json.loads(text, parse_int=str, parse_float=str, parse_constant=str)
     except json.JSONDecodeError as exc:
-        raise MissionError(Problem(located(source, exc.lineno, exc.colno), f"invalid JSON: {exc.msg}")) from None
+        raise MissionError(json_syntax_problem(exc, text, source)) from None
+    except RecursionError:
+        raise MissionError(json_depth_problem(text, source)) from None
     if not isinstance(data, dict):
         raise MissionError(Problem(source, "the configuration must be a JSON object"))
     return _Builder(source).build(data)
@@ -225,8 +236,8 @@ class _Builder:
 
     # -- reporting ----------------------------------------------------------------------------
 
-    def problem(self, path: str, message: str) -> None:
-        self.problems.append(Problem(f"{self.source}: {path}", message))
+    def problem(self, path: str, message: str, hint: str = "") -> None:
+        self.problems.append(hinted(f"{self.source}: {path}", message, hint))
 
     def warn(self, path: str, message: str) -> None:
         self.warnings.append(f"{self.source}: {path}: {message}")
@@ -312,13 +323,15 @@ class _Builder:
         if db_type is None:
             ok = False
         elif db_type.lower() != "file":
-            self.problem("world_db.type", f"Database type [{db_type}] is not supported")
+            self.problem("world_db.type", f"Database type [{db_type}] is not supported",
+                         "The only supported database type is file.")
             ok = False
         file_type = self.scalar(wd, "file_type", "world_db", "Database file type for [world_db] was not defined")
         if file_type is None:
             ok = False
         elif file_type.lower() != "xml":
-            self.problem("world_db.file_type", f"Database file type [{file_type}] is not supported")
+            self.problem("world_db.file_type", f"Database file type [{file_type}] is not supported",
+                         "The only supported database file type is xml.")
             ok = False
         path = self.scalar(wd, "path", "world_db", "Missing attributes [path] in world_db definition")
         xml_root = self.scalar(wd, "xml_root", "world_db")
@@ -346,13 +359,15 @@ class _Builder:
         if output_type is None:
             ok = False
         elif output_type.lower() != "file":
-            self.problem("output.output_type", f"Output type [{output_type}] is not supported")
+            self.problem("output.output_type", f"Output type [{output_type}] is not supported",
+                         "The only supported output type is file (the output is written to output.file_path).")
             ok = False
         file_type = self.scalar(out, "file_type", "output", "missing key output.file_type")
         if file_type is None:
             ok = False
         elif file_type.lower() not in ("json", "xml"):
-            self.problem("output.file_type", f"File type [{file_type}] is not supported")
+            self.problem("output.file_type", f"File type [{file_type}] is not supported",
+                         "Use json or xml.")
             ok = False
         file_path = self.scalar(out, "file_path", "output", "missing key output.file_path")
         if not ok or file_path is None:
@@ -461,7 +476,14 @@ class _Builder:
                 fields["attribute_name"] = req("attribute_name")
             fields["belongs_to"] = req("belongs_to")
         else:
-            self.problem(f"{path}.type", f"No mapping type [{kind_raw}] for semantic mappings.")
+            close = difflib.get_close_matches(kind, SEMANTIC_TYPES, n=1, cutoff=0.6)
+            self.problem(
+                f"{path}.type",
+                f"No mapping type [{kind_raw}] for semantic mappings.",
+                (f"Did you mean {close[0]}? " if close else "")
+                + f"Set {path}.type to attribute (a field of a record), ownership (records listed "
+                "inside another record) or relationship (records related to another record).",
+            )
         if len(self.problems) > before:
             return None
         return SemanticMapping(

@@ -398,6 +398,16 @@ _SELECT_RE = re.compile(
 _FORALL_RE = re.compile(r"[a-zA-Z]+[\w.]*(->forAll)[(][a-zA-Z]+[\w.]*[ ]*[|][ ]*(.)*[)]", re.ASCII)
 _IDENTIFIER = re.compile(r"[a-zA-Z]+[\w.]*", re.ASCII)
 
+# How to fix a value the regexes reject (the goal-model reader adds them to its located problems).
+SELECT_HINT = (
+    "Write <source>->select(<var>:<Type> | <condition>), e.g. world_db->select(r:Room | !r.is_clean), "
+    "with no spaces around ':' and a type of at least two characters."
+)
+FORALL_HINT = (
+    "Write <collection>->forAll(<var> | <condition>), e.g. rooms->forAll(r | r.is_clean); the "
+    "iteration variable has no type here (declare it in the goal's Controls)."
+)
+
 
 def _first_identifier(text: str) -> str:
     m = _IDENTIFIER.search(text)

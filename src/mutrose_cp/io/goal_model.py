@@ -6,6 +6,7 @@ custom property, and parses the embedded expressions.  Problems are collected pe
 """
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import os
@@ -15,8 +16,10 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any, Callable, TypeVar
 
-from ..errors import MissionError, Problem, located
+from ..errors import MissionError, Problem
 from .expressions import (
+    FORALL_HINT,
+    SELECT_HINT,
     Annotation,
     Condition,
     ForAll,
@@ -26,6 +29,7 @@ from .expressions import (
     parse_node_text,
     parse_select,
 )
+from .knowledge import hinted, json_depth_problem, json_syntax_problem
 
 
 @dataclass(frozen=True)
@@ -187,7 +191,9 @@ def parse_goal_model(text: str, source: str) -> GoalModel:
     try:
         data = json.loads(text)
     except json.JSONDecodeError as err:
-        raise MissionError(Problem(located(source, err.lineno, err.colno), f"invalid JSON: {err.msg}")) from None
+        raise MissionError(json_syntax_problem(err, text, source)) from None
+    except RecursionError:
+        raise MissionError(json_depth_problem(text, source)) from None
     return _Reader(source).read(data)
 
 
@@ -263,9 +269,33 @@ def parse_robot_number(value: str) -> RobotNumber:
     raise ValueError(f"Invalid declaration of robot number: {value}")
 
 
+#: How to fix the values rejected with the original's messages, by message prefix.
+HINTS = {
+    "Invalid declaration of robot number": "Write a number of robots such as 2, or a range such as [2,4], with no spaces.",
+    "Invalid variable declaration": "Declare variables as name : Type separated by commas, e.g. "
+    "rooms : Sequence(Room), current_room : Room.",
+    "Invalid forAll statement": FORALL_HINT,
+    "Invalid select statement": SELECT_HINT,
+}
+
+
+def _hint_for(message: str) -> str:
+    return next((hint for prefix, hint in HINTS.items() if message.startswith(prefix)), "")
+
+
 def parse_params(value: str) -> tuple[str, ...]:
     """``Params``: comma separated variable names, each trimmed; empty pieces are dropped."""
     return tuple(p for p in (piece.strip() for piece in value.split(",")) if p)
+
+
+def _property_hint(key: str) -> str:
+    """How to fix an unknown custom property: the closest known key, and the list."""
+    by_lower = {k.lower(): k for k in KNOWN_PROPERTIES}
+    close = difflib.get_close_matches(key.lower(), list(by_lower), n=1, cutoff=0.6)
+    known = ", ".join(sorted(KNOWN_PROPERTIES))
+    if close:
+        return f"Did you mean {by_lower[close[0]]}? Keys are case-sensitive; the known keys are {known}."
+    return f"Remove it or use one of the known (case-sensitive) keys: {known}."
 
 
 @dataclass
@@ -302,8 +332,8 @@ class _Reader:
     def _where(self, what: str) -> str:
         return f"{self.source}: {what}" if self.source else what
 
-    def problem(self, what: str, message: str) -> None:
-        self.problems.append(Problem(self._where(what), message))
+    def problem(self, what: str, message: str, hint: str = "") -> None:
+        self.problems.append(hinted(self._where(what), message, hint))
 
     def warn(self, what: str, message: str) -> None:
         self.warnings.append(str(Problem(self._where(what), message)))
@@ -313,14 +343,15 @@ class _Reader:
             raise MissionError(self.problems)
 
     def _attempt(self, what: str, prefix: str, parse: Callable[[], _T]) -> _T | None:
-        """Run a property parser, turning its error into a located problem (None on error)."""
+        """Run a property parser, turning its error into a located problem with advice on how to
+        fix it (None on error)."""
         try:
             return parse()
         except MissionError as err:
             for p in err.problems:
-                self.problem(what, f"{prefix}{p.message}")
+                self.problem(what, f"{prefix}{p.message}", getattr(p, "hint", "") or _hint_for(p.message))
         except ValueError as err:
-            self.problem(what, f"{prefix}{err}")
+            self.problem(what, f"{prefix}{err}", _hint_for(str(err)))
         return None
 
     # -- top level ------------------------------------------------------------------------------
@@ -461,7 +492,7 @@ class _Reader:
         """Interpret every custom property (spec §4, §6–§8) into ``fields``; errors become problems."""
         for key in props:
             if key not in KNOWN_PROPERTIES:
-                self.problem(where, f"Invalid property {key} in vertex {text}")
+                self.problem(where, f"Invalid property {key} in vertex {text}", _property_hint(key))
 
         goal_type = props.get("GoalType", "Perform")
         if goal_type not in GOAL_TYPES:

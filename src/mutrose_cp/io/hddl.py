@@ -6,6 +6,7 @@ Syntax errors and static domain errors (undeclared predicates or subtasks, arity
 """
 from __future__ import annotations
 
+import difflib
 import os
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
@@ -215,9 +216,16 @@ def parse_domain(text: str, source: str) -> Domain:
     problem is collected and raised together in one :class:`MissionError`, sorted by position."""
     try:
         tree = _parser().parse(text)
+        return _DomainReader(source).read(tree)
     except UnexpectedInput as exc:
         raise MissionError(_syntax_problem(exc, text, source)) from None
-    return _DomainReader(source).read(tree)
+    except RecursionError:
+        line, column, depth = _deepest_paren(text)
+        raise MissionError(Problem(
+            located(source, line, column),
+            f"the domain nests {depth} levels of parentheses, too deep to be read; no HDDL domain "
+            "needs this: the file is probably damaged",
+        )) from None
 
 
 # --- syntax errors ----------------------------------------------------------------------------
@@ -249,6 +257,32 @@ def _count(n: int, noun: str) -> str:
 def _end_of_text(text: str) -> tuple[int, int]:
     line = text.count("\n") + 1
     return line, len(text) - (text.rfind("\n") + 1) + 1
+
+
+def _deepest_paren(text: str) -> tuple[int, int, int]:
+    """(line, column, depth) of the first ``(`` at the deepest nesting (comments skipped)."""
+    depth = deepest = 0
+    at = (1, 1)
+    for line_no, line in enumerate(text.split("\n"), start=1):
+        for col, char in enumerate(line.split(";", 1)[0], start=1):
+            if char == "(":
+                depth += 1
+                if depth > deepest:
+                    deepest, at = depth, (line_no, col)
+            elif char == ")":
+                depth -= 1
+    return at[0], at[1], deepest
+
+
+def _closest(name: str, candidates: Iterable[str]) -> str | None:
+    """The declared name closest to a misspelt ``name``, if one is close enough."""
+    close = difflib.get_close_matches(name, list(dict.fromkeys(candidates)), n=1, cutoff=0.75)
+    return close[0] if close else None
+
+
+def _signature(name: str, parameters: Iterable[Parameter]) -> str:
+    """``(name ?a - t1 ?b - t2)`` as declared."""
+    return "(" + " ".join([name, *(f"{p.name} - {p.type}" for p in parameters)]) + ")"
 
 
 def _innermost_unclosed_paren(text: str) -> tuple[int, int] | None:
@@ -601,16 +635,19 @@ class _DomainReader:
     def _check_callee(self, callee: Token, arity: int, body: _Body) -> None:
         declared = self.tasks.get(callee.value) or self.actions.get(callee.value)
         if declared is None:
+            close = _closest(callee.value, [*self.tasks, *self.actions])
             self._error(
                 callee,
                 f"There is no declaration of the subtask {callee.value} (method '{body.name}'): "
-                "it is neither an abstract task nor an action",
+                "it is neither an abstract task nor an action"
+                + (f"; did you mean '{close}'?" if close is not None else ""),
             )
         elif arity > len(declared.parameters):
             self._error(
                 callee,
                 f"subtask {callee.value} in method '{body.name}' is given {_count(arity, 'argument')} "
-                f"but declares only {_count(len(declared.parameters), 'parameter')}",
+                f"but declares only {_count(len(declared.parameters), 'parameter')}: "
+                f"{_signature(declared.name, declared.parameters)}; remove the extra arguments",
             )
 
     def _ordering(
@@ -646,17 +683,22 @@ class _DomainReader:
     ) -> None:
         matching = [d for d in declarations if d.name == name.value]
         if not matching:
-            self._error(
-                name, f"undeclared {what} '{name.value}' in the {clause} of {body.kind} '{body.name}'"
-            )
+            message = f"undeclared {what} '{name.value}' in the {clause} of {body.kind} '{body.name}'"
+            close = _closest(name.value, (d.name for d in declarations))
+            if close is not None:
+                section = ":predicates" if what == "predicate" else ":functions"
+                message += f": did you mean '{close}'? If not, declare it in ({section} ...)"
+            self._error(name, message)
             return
         arities = sorted({len(d.parameters) for d in matching})
         if arity not in arities:
             declared = " or ".join(str(a) for a in arities)
+            signatures = " or ".join(_signature(d.name, d.parameters) for d in matching)
             self._error(
                 name,
                 f"{what} '{name.value}' is used with {_count(arity, 'argument')} in {body.kind} "
-                f"'{body.name}' but is declared with {declared}",
+                f"'{body.name}' but is declared with {declared}: {signatures}; pass one argument "
+                "per declared parameter",
             )
 
     def _preconditions(self, clause: Tree | None, body: _Body) -> tuple[Condition, ...]:

@@ -9,6 +9,7 @@ thousands of times (one per ``forAll`` iteration) do not rescan the whole docume
 """
 from __future__ import annotations
 
+import json
 import os
 import re
 from dataclasses import dataclass
@@ -18,6 +19,83 @@ from typing import Iterator
 from lxml import etree
 
 from ..errors import MissionError, Problem, located
+
+# ---------------------------------------------------------------------------------------------
+# Problems shared by the readers (configuration, goal model, expressions, knowledge)
+
+
+@dataclass(frozen=True)
+class HintedProblem(Problem):
+    """A problem with advice on how to fix it.
+
+    ``message`` keeps the original tool's wording (users and scripts grep for it) and ``hint``
+    says how to fix the input; the printed form shows both:
+    ``where: message. Hint.``  (Shared by the readers; it belongs next to :class:`Problem`.)"""
+
+    hint: str = ""
+
+    def __str__(self) -> str:
+        text = super().__str__()
+        if not self.hint:
+            return text
+        return f"{text} {self.hint}" if text.endswith((".", "!", "?")) else f"{text}. {self.hint}"
+
+
+def hinted(where: str, message: str, hint: str = "") -> Problem:
+    """A :class:`Problem`, with ``hint`` when there is one."""
+    return HintedProblem(where, message, hint) if hint else Problem(where, message)
+
+
+def json_syntax_problem(err: json.JSONDecodeError, text: str, source: str) -> Problem:
+    """``file:line:col: invalid JSON: <reason>``, saying so when the text simply stops early."""
+    where = located(source, err.lineno, err.colno)
+    rest = text[err.pos:]
+    truncated = not rest.strip() or (err.msg.startswith("Unterminated string") and '"' not in rest[1:])
+    if truncated:
+        return HintedProblem(
+            where,
+            f"invalid JSON: {err.msg}",
+            "The text ends before the JSON document is complete: the file looks truncated; "
+            "restore its end (every '{' and '[' needs its closing '}' and ']').",
+        )
+    return Problem(where, f"invalid JSON: {err.msg}")
+
+
+def json_depth_problem(text: str, source: str) -> Problem:
+    """The JSON nests too deeply to be read (Python's decoder recursed out): located at the
+    first bracket of the deepest nesting."""
+    depth = deepest = 0
+    line, column, at = 1, 1, (1, 1)
+    in_string = escaped = False
+    for char in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif char == "\\":
+                escaped = True
+            elif char == '"':
+                in_string = False
+        elif char == '"':
+            in_string = True
+        elif char in "[{":
+            depth += 1
+            if depth > deepest:
+                deepest, at = depth, (line, column)
+        elif char in "]}":
+            depth -= 1
+        if char == "\n":
+            line, column = line + 1, 1
+        else:
+            column += 1
+    return HintedProblem(
+        located(source, *at),
+        f"invalid JSON: arrays and objects are nested {deepest} levels deep, too deep to be read",
+        "No mission file nests like this: the file is probably damaged.",
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Hardened, tolerant XML parsing (shared with the XML configuration reader)
 
 # libxml2 errors that the original's reader (rapidxml) does not report either: a closing tag
 # whose name differs from the open element (libxml2's recovery pops the innermost element, the
@@ -30,10 +108,6 @@ _CPP_SPACE = " \t\n\v\f\r"  # what ``istream >>`` skips
 _LIST_SEPARATORS = re.compile(r"[,\s]+")
 _INT_PREFIX = re.compile(r"[+-]?\d+")
 _FLOAT_PREFIX = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-
-
-# ---------------------------------------------------------------------------------------------
-# Hardened, tolerant XML parsing (shared with the XML configuration reader)
 
 
 def _hardened_parser() -> etree.XMLParser:
@@ -52,6 +126,13 @@ def _hardened_parser() -> etree.XMLParser:
 def _line_of(data: bytes, needle: bytes) -> int:
     pos = data.find(needle)
     return data.count(b"\n", 0, pos) + 1 if pos >= 0 else 1
+
+
+_DTD_HINT = (
+    "Remove the <!DOCTYPE ...> declaration and write every value out literally: the decomposer "
+    "never reads DTDs nor expands entities (this protects against billion-laughs and "
+    "external-entity attacks)."
+)
 
 
 _XML_DECL_ENCODING = re.compile(r"""^(\ufeff?\s*<\?xml[^>]*?encoding\s*=\s*)(["'])[^"']*\2""")
@@ -77,9 +158,10 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Elem
     if root is not None:
         info = root.getroottree().docinfo
         if info.internalDTD is not None or info.doctype:
-            raise MissionError(Problem(
+            raise MissionError(HintedProblem(
                 located(source, _line_of(data, b"<!DOCTYPE")),
                 f"DTD and entity declarations are not allowed in {what}",
+                _DTD_HINT,
             ))
     errors = [e for e in parser.error_log if e.type_name not in TOLERATED_XML_ERRORS]
     if errors or root is None:
@@ -91,13 +173,16 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Elem
     return root
 
 
-def read_bytes(path: str | os.PathLike[str], what: str) -> bytes:
-    """Read a whole input file; a missing/unreadable file is a located MissionError."""
+def read_bytes(path: str | os.PathLike[str], what: str, hint: str = "") -> bytes:
+    """Read a whole input file; a missing/unreadable file is a located MissionError (with
+    ``hint`` saying where the path came from)."""
     try:
         with open(path, "rb") as fh:
             return fh.read()
     except OSError as exc:
-        raise MissionError(Problem(os.fspath(path), f"cannot read {what} file: {exc.strerror or exc}")) from None
+        raise MissionError(
+            hinted(os.fspath(path), f"cannot read {what} file: {exc.strerror or exc}", hint)
+        ) from None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -268,7 +353,12 @@ def load_knowledge(
     tag, pre-order); None uses the document root, as the original does after its warning.
     """
     source = os.fspath(path)
-    data = read_bytes(path, "world knowledge")
+    data = read_bytes(
+        path,
+        "world knowledge",
+        "The world knowledge file is named by world_db.path in the configuration; a relative path "
+        "is looked up from the current directory, then from the mission folder.",
+    )
     doc_root = parse_tolerant_xml(data, source, "world knowledge")
     root: etree._Element | None
     if xml_root is None:
@@ -278,8 +368,10 @@ def load_knowledge(
     else:
         root = next(doc_root.iterdescendants(tag=xml_root), None) if xml_root else None
     if root is None:
-        raise MissionError(Problem(
+        raise MissionError(HintedProblem(
             located(source, doc_root.sourceline),
             f"Root element [{xml_root}] (world_db.xml_root) was not found in world knowledge",
+            f"Set world_db.xml_root in the configuration to the tag of the element that holds the "
+            f"records (the document root here is <{doc_root.tag}>).",
         ))
     return WorldKnowledge(source=source, root=root, unique_id=unique_id or "name")
