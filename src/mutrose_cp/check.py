@@ -104,7 +104,8 @@ def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[P
                                                f"to relation type {m.relates_to}"))
             elif m.arg_sorts[0] != config.type_mapping.get(m.relates_to):
                 problems.append(Problem(where, f"Cannot map predicate [{m.pred}] with argument of type "
-                                               f"{m.arg_sorts[0]} to relation type {m.relates_to}"))
+                                               f"{m.arg_sorts[0]} to relation type {m.relates_to}"
+                                               f"{_type_mapping_note(config, m.relates_to)}"))
         elif m.type in ("ownership", "relationship"):
             decls = [d for d in domain.predicate_declarations(m.pred)
                      if tuple(p.type for p in d.parameters) == m.arg_sorts]
@@ -119,11 +120,19 @@ def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[P
             for sort, ocl, label in ((m.arg_sorts[0], first, names[0]), (m.arg_sorts[1], second, names[1])):
                 if config.type_mapping.get(ocl) != sort:
                     problems.append(Problem(where, f"Cannot map predicate [{m.pred}] with argument of type {sort} "
-                                                   f"to {label} type {ocl}"))
+                                                   f"to {label} type {ocl}{_type_mapping_note(config, ocl)}"))
         else:
             problems.append(Problem(where, f"No mapping type [{m.type}] for semantic mappings. Use attribute, "
                                            "ownership or relationship."))
     return problems
+
+
+def _type_mapping_note(config: Configuration, ocl: str) -> str:
+    """Why an argument sort does not fit an OCL type: what the type_mapping says about it."""
+    hddl = config.type_mapping.get(ocl)
+    if hddl is None:
+        return f": type_mapping has no entry for {ocl}; add one"
+    return f": type_mapping maps {ocl} to {hddl}, so the argument sort must be {hddl}"
 
 
 def _missing_predicate(domain: Domain, pred: str, arg_sorts: tuple[str, ...]) -> str:
@@ -206,10 +215,11 @@ def check_gm_validity(domain: Domain, gm: GoalModel) -> list[Problem]:
                                                f"{_did_you_mean(node.task_name or '', domain.task_by_name)}"))
             elif node.robot_number is None:
                 task = domain.task_by_name[node.task_name]
-                if any(p.type == "robotteam" for p in task.parameters):
+                teams = [p.name for p in task.parameters if p.type == "robotteam"]
+                if teams:
                     problems.append(Problem(where, "Tasks without RobotNumber attribute cannot have robotteam "
-                                                   f"variable! {node.task_name} has a robotteam parameter: give "
-                                                   "the task a RobotNumber such as [2,4]"))
+                                                   f"variable! {node.task_name} has the robotteam parameter "
+                                                   f"{', '.join(teams)}: give the task a RobotNumber such as [2,4]"))
     return problems
 
 

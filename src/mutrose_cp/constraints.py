@@ -7,7 +7,7 @@ SEQ/FB links are trimmed, and EC partners must agree on robot numbers.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from .errors import MissionError
 from .taskgraph import AND, ATASK, CD, EC, OP, OR, TaskGraph
@@ -15,9 +15,10 @@ from .taskgraph import AND, ATASK, CD, EC, OP, OR, TaskGraph
 SEQ, FB, PAR = "SEQ", "FB", "PAR"
 
 
-@dataclass(frozen=True, slots=True)
-class Constraint:
-    """``kind`` between two vertices (tasks while generating, decompositions when final)."""
+class Constraint(NamedTuple):
+    """``kind`` between two vertices (tasks while generating, decompositions when final).
+
+    A named tuple: large missions have around a million of them."""
 
     kind: str  # SEQ | FB | EC (| PAR while generating)
     first: int
@@ -156,16 +157,19 @@ def _trim(constraints: list[Constraint]) -> list[Constraint]:
         elif c.kind == FB:
             fb_succ.setdefault(c.first, set()).add(c.second)
             fb_pred.setdefault(c.second, set()).add(c.first)
-    drop: set[int] = set()
-    for i, c in enumerate(constraints):
-        mids = seq_succ.get(c.first, set())
-        if c.kind == SEQ:
-            if mids & (seq_pred.get(c.second, set()) | fb_pred.get(c.second, set())):
-                drop.add(i)
-        elif c.kind == FB:
-            if fb_succ.get(c.first, set()) & fb_pred.get(c.second, set()):
-                drop.add(i)
-    return [c for i, c in enumerate(constraints) if i not in drop]
+    empty: set[int] = set()
+    kept: list[Constraint] = []
+    for c in constraints:
+        kind = c[0]
+        if kind == SEQ:
+            mids = seq_succ.get(c.first, empty)
+            if mids and (mids & seq_pred.get(c.second, empty) or mids & fb_pred.get(c.second, empty)):
+                continue
+        elif kind == FB:
+            if fb_succ.get(c.first, empty) & fb_pred.get(c.second, empty):
+                continue
+        kept.append(c)
+    return kept
 
 
 def _check_robot_numbers(tg: TaskGraph, constraints: list[Constraint]) -> None:

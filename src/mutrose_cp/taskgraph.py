@@ -7,6 +7,7 @@ constraints (EC).  The graph is built from the runtime annotation tree, then red
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Iterator, Mapping
 
@@ -364,9 +365,8 @@ def _trim(tg: TaskGraph) -> TaskGraph:
         return tg.edge_type(old, kids[0]) if kids else AND
 
     def insert(old: int, parent_old: int | None) -> None:
-        vx = tg.vertices[old]
-        nv = Vertex(**{**vx.__dict__, "index": -1,
-                       "parent": index[parent_old] if parent_old is not None else -1})
+        nv = copy.copy(tg.vertices[old])
+        nv.parent = index[parent_old] if parent_old is not None else -1
         new.add(nv)
         index[old] = nv.index
         if parent_old is not None:
@@ -377,7 +377,8 @@ def _trim(tg: TaskGraph) -> TaskGraph:
             if tg.vertices[u].kind == ATASK:
                 insert(u, under_old)
                 for d in tg.out(u, AND):
-                    nd = Vertex(**{**tg.vertices[d].__dict__, "index": -1, "parent": index[u]})
+                    nd = copy.copy(tg.vertices[d])
+                    nd.parent = index[u]
                     new.add(nd)
                     index[d] = nd.index
                     new.add_edge(index[u], nd.index, AND)
@@ -388,11 +389,15 @@ def _trim(tg: TaskGraph) -> TaskGraph:
             p = tg.vertices[p].parent
         return p
 
+    below_root: set[int] = set()
+    stack = [root]
+    while stack:
+        u = stack.pop()
+        below_root.add(u)
+        stack.extend(tg.children(u))
     for vx in tg.vertices[root:]:
         v = vx.index
-        if vx.kind in (ATASK, DECOMPOSITION):
-            continue
-        if v != root and not _descends(tg, v, root):
+        if vx.kind in (ATASK, DECOMPOSITION) or v not in below_root:
             continue
         keep = vx.kind == OP and (len(tg.children(v)) >= 2 or vx.is_achieve_type)
         if v == root:
@@ -414,14 +419,6 @@ def _trim(tg: TaskGraph) -> TaskGraph:
                 new._ec.setdefault(index[a], []).append((index[b], group, divisible))
                 new._ec_pairs.add((index[a], index[b]))
     return new
-
-
-def _descends(tg: TaskGraph, v: int, root: int) -> bool:
-    while v != -1:
-        if v == root:
-            return True
-        v = tg.vertices[v].parent
-    return False
 
 
 def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,

@@ -206,21 +206,27 @@ def _xml_map(mp: etree._Element, path: str, builder: "_Builder") -> dict[str, An
     if pred is not None:
         out["pred"] = text_of(pred)
     sorts = _last_child(mp, "arg_sorts")
+    hint = (
+        'The number attribute says how many sorts are listed, e.g. <arg_sorts number="2">obj '
+        "storage</arg_sorts>."
+    )
     if sorts is not None:
         tokens = text_of(sorts).split()
         number = sorts.get("number")
         if number is None:
-            builder.problem(f"{path}.arg_sorts", "missing attribute [number] in arg_sorts")
+            builder.problem(f"{path}.arg_sorts", "missing attribute [number] in arg_sorts", hint)
             out["arg_sorts"] = tokens
         else:
             try:
                 n = int(number.strip())
             except ValueError:
-                builder.problem(f"{path}.arg_sorts", f"invalid attribute number [{number}] in arg_sorts")
+                builder.problem(f"{path}.arg_sorts", f"invalid attribute number [{number}] in arg_sorts",
+                                hint)
                 n = len(tokens)
             if n < 0 or n > len(tokens):
                 builder.problem(
-                    f"{path}.arg_sorts", f"arg_sorts declares {number.strip()} sorts but lists {len(tokens)}"
+                    f"{path}.arg_sorts", f"arg_sorts declares {number.strip()} sorts but lists {len(tokens)}",
+                    hint,
                 )
             out["arg_sorts"] = tokens[: max(n, 0)]
     return out

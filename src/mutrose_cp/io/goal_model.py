@@ -271,7 +271,8 @@ def parse_robot_number(value: str) -> RobotNumber:
 
 #: How to fix the values rejected with the original's messages, by message prefix.
 HINTS = {
-    "Invalid declaration of robot number": "Write a number of robots such as 2, or a range such as [2,4], with no spaces.",
+    "Invalid declaration of robot number": "Write a number of robots such as 2, or a range such as "
+    "[2,4], with no spaces.",
     "Invalid variable declaration": "Declare variables as name : Type separated by commas, e.g. "
     "rooms : Sequence(Room), current_room : Room.",
     "Invalid forAll statement": FORALL_HINT,

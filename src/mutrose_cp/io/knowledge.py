@@ -167,9 +167,16 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Elem
     if errors or root is None:
         if not errors:
             raise MissionError(Problem(source, f"XML syntax error in {what}: the document has no root element"))
-        raise MissionError(
-            [Problem(located(source, e.line, e.column), f"XML syntax error in {what}: {e.message}") for e in errors]
-        )
+        # libxml2 reports one mistake as several messages at the same position: one problem each
+        by_position: dict[tuple[int, int], list[str]] = {}
+        for e in errors:
+            messages = by_position.setdefault((e.line, e.column), [])
+            if e.message not in messages:
+                messages.append(e.message)
+        raise MissionError([
+            Problem(located(source, line, column), f"XML syntax error in {what}: {'; '.join(messages)}")
+            for (line, column), messages in by_position.items()
+        ])
     return root
 
 
