@@ -2,6 +2,7 @@
 
     python examples/allocation.py [MISSION_DIR] [--config NAME] [--robots N] [--time-limit S]
                                   [--durations action|unit] [--fleet FLEET.json] [--deliveries N]
+                                  [--workers N] [--seed N] [--deterministic-limit T] [--log]
 
 The decomposition space comes from ``mission.decomposition_model()``: one CP-SAT model whose
 solutions are exactly the valid mission decompositions (``mutrose_cp.api``).  This script adds
@@ -18,13 +19,14 @@ its own variables to that same model:
   start(second)`` for every SEQ (and FB: the fallback is scheduled after its primary, the
   worst case); a decomposition that is not chosen takes no time and only passes precedences on;
 * one optional interval per (decomposition, candidate robot), ``AddNoOverlap`` per robot;
-* objective: minimise the makespan.
+* objective: minimise the makespan (plus a redundant load constraint per robot, which gives
+  CP-SAT's own bound the energy argument).
 
 Then it computes a lower bound on the makespan from the LP relaxation of the same problem
 (continuous assignments ``x[d,r]`` in [0, 1], decomposition choice relaxed through the linear
 relaxation of the boolean decomposition model, robot loads ``sum_d dur_d x[d,r] <= M``, start
-times along precedence chains) with Clarabel, and prints the CP-SAT objective, CP-SAT's own bound,
-the LP bound and the gaps.  ``main()`` returns an :class:`AllocationResult` (used by the tests).
+times along precedence chains, chains along the goal model's operators) with Clarabel, and
+prints the CP-SAT objective, CP-SAT's own bound, the LP bound and the gaps.  ``main()`` returns an :class:`AllocationResult` (used by the tests).
 """
 from __future__ import annotations
 
@@ -408,9 +410,15 @@ class AllocationResult:
 
 
 def solve(mission_dir: str | Path = DEFAULT_MISSION, config: str | None = None, robots: int = 3,
-          time_limit: float = 10.0, workers: int = 8, seed: int = 0, durations_mode: str = "action",
+          time_limit: float = 10.0, workers: int = 1, seed: int = 0, durations_mode: str = "action",
           fleet: str | Path | None = None, lp: bool = True, log: bool = False,
-          redundant: bool = True) -> AllocationResult:
+          redundant: bool = True, deterministic_limit: float | None = None) -> AllocationResult:
+    """Load the mission, build the joint model, solve it with CP-SAT and compute the LP bound.
+
+    CP-SAT runs with a fixed ``seed``; one worker (the default) or several interleaved workers
+    make the search deterministic, so a run that finishes before ``time_limit`` always returns
+    the same solution.  A run cut by the wall-clock limit depends on the machine's speed; use
+    ``deterministic_limit`` (CP-SAT's deterministic time) for reproducible truncated runs."""
     t0 = time.perf_counter()
     mission = Mission.load(*find_mission_files(mission_dir, config))
     dm = mission.decomposition_model()
@@ -427,6 +435,8 @@ def solve(mission_dir: str | Path = DEFAULT_MISSION, config: str | None = None, 
     solver = cp_model.CpSolver()
     p = solver.parameters
     p.max_time_in_seconds = time_limit
+    if deterministic_limit is not None:
+        p.max_deterministic_time = deterministic_limit
     p.num_workers = workers
     p.random_seed = seed
     p.interleave_search = workers > 1  # deterministic multi-worker search
@@ -470,7 +480,7 @@ def report(res: AllocationResult) -> str:
         for d in sorted(res.chosen, key=lambda d: (res.start[d], d)):
             lines.append(f"  {d:<10} {res.start[d]:>3}-{res.end[d]:<3} {' '.join(res.assignment[d])}"
                          f"   [{', '.join(res.dm.decompositions_info[d].actions)}]")
-    fmt = lambda g: "n/a" if g is None else f"{100 * g:.1f}%"  # noqa: E731
+    fmt = lambda g: "n/a" if g is None else f"{100 * g + 0.0:.1f}%".replace("-0.0%", "0.0%")  # noqa: E731
     lines += [f"CP-SAT objective (makespan): {res.objective}",
               f"CP-SAT bound:                {res.cp_bound:g}   gap {fmt(res.gap_cp)}",
               f"LP bound (Clarabel):         {res.lp_bound:.4f} (ceil {res.lp_bound_int})   gap {fmt(res.gap_lp)}",
@@ -507,14 +517,18 @@ def main(argv: list[str] | None = None) -> AllocationResult:
     ap.add_argument("--durations", choices=("action", "unit"), default="action",
                     help="action: per-action table (default); unit: 1 per action")
     ap.add_argument("--time-limit", type=float, default=10.0, help="CP-SAT time limit in seconds (default 10)")
-    ap.add_argument("--workers", type=int, default=8, help="CP-SAT workers (interleaved: deterministic)")
+    ap.add_argument("--workers", type=int, default=1,
+                    help="CP-SAT workers (default 1; more are interleaved, which stays deterministic)")
+    ap.add_argument("--deterministic-limit", type=float,
+                    help="also stop at this CP-SAT deterministic time (reproducible truncated runs)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--deliveries", type=int,
                     help="item-delivery only: solve a temporary copy with this many pending deliveries")
     ap.add_argument("--log", action="store_true", help="CP-SAT search log")
     args = ap.parse_args(argv)
     kwargs = dict(config=args.config, robots=args.robots, time_limit=args.time_limit, workers=args.workers,
-                  seed=args.seed, durations_mode=args.durations, fleet=args.fleet, log=args.log)
+                  seed=args.seed, durations_mode=args.durations, fleet=args.fleet, log=args.log,
+                  deterministic_limit=args.deterministic_limit)
     if args.deliveries:
         with tempfile.TemporaryDirectory() as tmp:
             folder = make_item_delivery_copy(args.deliveries, tmp, args.mission)

@@ -472,11 +472,21 @@ def _task(draw, name: str, actions: tuple[Action, ...], earlier: tuple[Task, ...
           room_preds, robot_preds) -> Task:
     n_methods = draw(st.integers(1, 3))
     switch = draw(_literals(room_preds, (), (1,)))[0]
+    # 0: independent preconditions; 1: the methods split on a room fact (switch / not switch),
+    # 2: on the level ((> 0), (= 0), (= 1)) - so that some method fits most world states
+    scheme = draw(st.integers(0, 2)) if n_methods >= 2 else 0
+    split = ([switch], [Lit(switch.pred, switch.var, not switch.positive)]) if scheme == 1 else (
+        [Cmp(">", 0)], [Cmp("=", 0)], [Cmp("=", 1)])
     methods = []
     budget = MAX_PATHS
     for k in range(n_methods):
         remaining_methods = n_methods - k - 1
-        pre = draw(_method_precondition(switch, room_preds, robot_preds))
+        if scheme and k < len(split):
+            pre = list(split[k])
+            if draw(st.integers(0, 3)) == 0:
+                pre += draw(_literals(room_preds, robot_preds, (1,)))
+        else:
+            pre = draw(_method_precondition(switch, room_preds, robot_preds))
         callees = [a.name for a in actions] + [t.name for t in earlier]
         subtasks = draw(st.lists(st.sampled_from(callees), min_size=1, max_size=2))
         ordered = draw(st.integers(0, 3)) != 0
@@ -513,7 +523,10 @@ def _goal(draw, budget: int, depth: int, task_names: tuple[str, ...], room_preds
           top: bool = False) -> GoalNode:
     """A goal with 1..3 children using at most ``budget`` GM tasks (at least one)."""
     max_children = min(3, budget) if depth < MAX_DEPTH else 1
-    k = draw(st.integers(1, max_children))
+    if top:  # the forAll goal: mostly an operator over two or three children
+        k = min(max_children, draw(st.sampled_from([2, 3, 1])))
+    else:
+        k = draw(st.integers(1, max_children))
     children: list[Node] = []
     used = 0
     for i in range(k):
@@ -566,8 +579,8 @@ def missions(draw) -> MissionSpec:
     rooms = []
     for i in range(n_rooms):
         active = draw(st.integers(0, 7)) != 7
-        facts = tuple((p, draw(st.sampled_from([False, True, None]))) for p in room_preds)
-        level = draw(st.sampled_from([0, 1, 2, None]))
+        facts = tuple((p, draw(st.sampled_from([None, True, False, None]))) for p in room_preds)
+        level = draw(st.sampled_from([1, 0, 2, None]))
         rooms.append(Room(f"Room{i + 1}", active, facts, level))
     query_active = draw(st.integers(0, 3)) != 0
     selected = [r for r in rooms if r.active or not query_active]

@@ -25,7 +25,12 @@ from lxml import etree
 
 from mutrose_cp.cli import main
 from mutrose_cp.errors import MissionError
-from mutrose_cp.io.config import Configuration, parse_configuration_json, parse_configuration_xml
+from mutrose_cp.io.config import (
+    Configuration,
+    load_configuration,
+    parse_configuration_json,
+    parse_configuration_xml,
+)
 from mutrose_cp.io.expressions import (
     AnnotationLeaf,
     AnnotationOp,
@@ -38,8 +43,8 @@ from mutrose_cp.io.expressions import (
     parse_node_text,
     parse_select,
 )
-from mutrose_cp.io.goal_model import GoalModel, parse_goal_model
-from mutrose_cp.io.hddl import Domain, parse_domain
+from mutrose_cp.io.goal_model import GoalModel, load_goal_model, parse_goal_model
+from mutrose_cp.io.hddl import Domain, load_domain, parse_domain
 from mutrose_cp.io.knowledge import WorldKnowledge, load_knowledge
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -86,7 +91,9 @@ def _xml_configuration(json_text: str) -> str:
     lines.append("  </location_type>")  # the lenient end tag of the shipped files
     lines.append("  <type_mapping>")
     for m in data["type_mapping"]:
-        lines.append(f"    <mapping><hddl_type>{m['hddl_type']}</hddl_type><ocl_type>{m['ocl_type']}</ocl_type></mapping>")
+        lines.append(
+            f"    <mapping><hddl_type>{m['hddl_type']}</hddl_type><ocl_type>{m['ocl_type']}</ocl_type></mapping>"
+        )
     lines.append("  </type_mapping>")
     lines.append("  <var_mapping>")
     for vm in data["var_mapping"]:
@@ -168,6 +175,25 @@ def mutated(draw, text: str, alphabet: str, words: list[str]) -> str:
         else:
             del chars[pos:]
     return "".join(chars)
+
+
+@st.composite
+def mutated_bytes(draw, data: bytes) -> bytes:
+    """``data`` with a few byte-level edits (any byte value: invalid UTF-8, NULs, BOMs)."""
+    out = bytearray(data)
+    for _ in range(draw(st.integers(1, 4))):
+        kind = draw(st.sampled_from(["delete", "insert", "replace", "truncate"]))
+        pos = draw(st.integers(0, len(out)))
+        if kind == "delete":
+            del out[pos:pos + draw(st.integers(1, 8))]
+        elif kind == "insert":
+            out[pos:pos] = draw(st.one_of(st.binary(min_size=1, max_size=4),
+                                          st.sampled_from([b"\xef\xbb\xbf", b"\xff\xfe", b"\x00", b"\xc3"])))
+        elif kind == "replace":
+            out[pos:pos + 1] = draw(st.binary(min_size=1, max_size=2))
+        else:
+            del out[pos:]
+    return bytes(out)
 
 
 def grammarish(alphabet: str, words: list[str], max_size: int = 30) -> st.SearchStrategy[str]:
@@ -252,6 +278,36 @@ def test_knowledge_reader_never_crashes(case, xml_root, unique_id):
     if result is not None:
         assert isinstance(result, WorldKnowledge)
         _ = result.records  # the record index must be buildable on whatever was accepted
+
+
+FILE_READERS = {
+    "hddl": (HDDL_FILES, "domain.hddl", load_domain, Domain),
+    "gm": (GM_FILES, "gm.json", load_goal_model, GoalModel),
+    "json configuration": (CONFIG_FILES, "configuration.json", load_configuration, Configuration),
+    "xml configuration": (XML_CONFIG_FILES, "configuration.xml", load_configuration, Configuration),
+    "world": (WORLD_FILES, "world_db.xml", lambda p: load_knowledge(p, "world_db"), WorldKnowledge),
+}
+
+
+@PARSER_SETTINGS
+@given(
+    st.sampled_from(sorted(FILE_READERS)).flatmap(
+        lambda kind: st.tuples(
+            st.just(kind),
+            st.sampled_from(FILE_READERS[kind][0]).flatmap(lambda f: mutated_bytes(f[1].encode("utf-8"))),
+        )
+    )
+)
+def test_file_readers_never_crash_on_corrupt_bytes(case):
+    """The ``load_*`` functions read files: any byte sequence (bad encodings included) gives a
+    model or a MissionError."""
+    kind, data = case
+    _files, name, load, model = FILE_READERS[kind]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / name
+        path.write_bytes(data)
+        result = _only_mission_errors(load, path)
+    assert result is None or isinstance(result, model)
 
 
 def _gm_expressions() -> list[tuple[str, str]]:

@@ -316,3 +316,23 @@ def test_render_with_graphviz(hospital: Mission, tmp_path: Path) -> None:
         assert svg.rendered and "<svg" in svg.path.read_text()
         png = render(text, tmp_path / f"{name}.png")
         assert png.path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# ---------------------------------------------------------------------------------------------
+# the mission of docs/guide.md (its numbers and pictures are quoted in the guide)
+
+
+def test_guide_mission() -> None:
+    mission = _load(ROOT / "docs" / "guide-mission")
+    assert len(mission.expansion.instances) == 12
+    assert len(mission.task_graph.decompositions()) == 17
+    kinds = [c.kind for c in mission.constraints]
+    assert (kinds.count("SEQ"), kinds.count("FB"), kinds.count("EC")) == (22, 0, 12)
+    assert mission.decomposition_space().count == 8
+    gm = goal_model_dot(mission)
+    # Sample2 has no barcode label: the condition context of G10 removes the analyser branch
+    assert _label_of(gm, "AT3_2") == r"AT3_2: AnalyseSample\nremoved: context is false"
+    assert "removed" not in _label_of(gm, "AT3_1")
+    dec = decomposition_dot(mission, 0)
+    assert r"3. pick-sample(?r, Sample2, Ward2)\l" in _label_of(dec, "AT1_2|2")
+    assert _label_of(dec, "AT4_2|1").startswith(r"t10  AT4_2|1\nManualAnalysis\nrobots: 2..3\n")

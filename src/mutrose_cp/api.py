@@ -42,7 +42,7 @@ __all__ = ["Mission", "DecompositionModel", "DecompositionInfo", "ConstraintInfo
 #: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its
 #: negation.  Every literal of the maps can be used in ``OnlyEnforceIf``, ``AddBoolOr``, linear
 #: expressions and ``solver.BooleanValue`` alike.
-CpLiteral = Union[cp_model.IntVar, "cp_model.NotBooleanVariable"]
+CpLiteral = Union[cp_model.IntVar, cp_model.NotBooleanVariable]
 
 
 class ConstraintInfo(NamedTuple):

@@ -84,30 +84,54 @@ def _escape(s: str) -> str:
     return '"' + "".join(out) + '"'
 
 
-def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
-    """Serialize like ``boost::property_tree::write_json`` (pretty): empty containers are ``""``."""
+def _boost_parts(tree: Tree, indent: int, out: list[str]) -> None:
     if isinstance(tree, str):
-        fh.write(_escape(tree))
+        out.append(_escape(tree))
         return
     if not tree:
-        fh.write('""')
+        out.append('""')
         return
     pad = " " * (indent + 4)
     if isinstance(tree, dict):
-        fh.write("{\n")
-        items = list(tree.items())
-        for i, (k, v) in enumerate(items):
-            fh.write(f"{pad}{_escape(k)}: ")
-            write_boost_json(v, fh, indent + 4)
-            fh.write(",\n" if i < len(items) - 1 else "\n")
-        fh.write(" " * indent + "}")
+        out.append("{\n")
+        last = len(tree) - 1
+        for i, (k, v) in enumerate(tree.items()):
+            out.append(f"{pad}{_escape(k)}: ")
+            _boost_parts(v, indent + 4, out)
+            out.append(",\n" if i < last else "\n")
+        out.append(" " * indent + "}")
     else:
-        fh.write("[\n")
+        out.append("[\n")
+        last = len(tree) - 1
         for i, v in enumerate(tree):
-            fh.write(pad)
-            write_boost_json(v, fh, indent + 4)
-            fh.write(",\n" if i < len(tree) - 1 else "\n")
-        fh.write(" " * indent + "]")
+            out.append(pad)
+            _boost_parts(v, indent + 4, out)
+            out.append(",\n" if i < last else "\n")
+        out.append(" " * indent + "]")
+
+
+def boost_json(tree: Tree, indent: int = 0) -> str:
+    """Serialize like ``boost::property_tree::write_json`` (pretty): every scalar a string,
+    empty containers as ``""``, 4-space indentation."""
+    out: list[str] = []
+    _boost_parts(tree, indent, out)
+    return "".join(out)
+
+
+def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
+    fh.write(boost_json(tree, indent))
+
+
+def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
+    """A JSON list whose elements are already serialized at ``indent + 4``; streamed."""
+    first = True
+    pad = " " * (indent + 4)
+    for item in items:
+        fh.write("[\n" if first else ",\n")
+        fh.write(pad)
+        fh.write(item)
+        first = False
+    fh.write('""' if first else "\n" + " " * indent + "]")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -242,6 +266,15 @@ class OutputBuilder:
     def _pred(p: PrintedPredicate) -> dict[str, str]:
         return {"predicate": p.text, "vars": p.args[-1] if p.args else "", "var_types": p.sorts[-1] if p.sorts else ""}
 
+    def _constraint_json(self, c: Constraint) -> str:
+        """One constraint at indent 8, formatted directly (there can be a million)."""
+        head = (f'{{\n            "type": "{"SEQ" if c.kind == SEQ else "EC"}",\n            "task_instances": {{\n'
+                f'                "t0": "{self.key[c.first]}",\n                "t1": "{self.key[c.second]}"\n'
+                f'            }}')
+        if c.kind == EC:
+            return head + f',\n            "group": "{c.group}",\n            "divisible": "{c.divisible}"\n        }}'
+        return head + "\n        }"
+
     def constraint_entry(self, c: Constraint) -> dict[str, Tree]:
         entry: dict[str, Tree] = {
             "type": "SEQ" if c.kind == SEQ else "EC",
@@ -257,10 +290,17 @@ class OutputBuilder:
         fh.write("{\n    \"actions\": ")
         write_boost_json([{"name": n, "capabilities": caps[-1] if caps else ""} for n, caps in self.actions()], fh, 4)
         fh.write(",\n    \"tasks\": ")
-        tasks = {self.key[d.index]: self.task_entry(d.decomposition, d.group, d.divisible) for d in self.decs}
-        write_boost_json(tasks, fh, 4)
+        if self.decs:
+            fh.write("{\n")
+            last = len(self.decs) - 1
+            for i, d in enumerate(self.decs):
+                entry = boost_json(self.task_entry(d.decomposition, d.group, d.divisible), 8)
+                fh.write(f'        "{self.key[d.index]}": {entry}' + (",\n" if i < last else "\n"))
+            fh.write("    }")
+        else:
+            fh.write('""')
         fh.write(",\n    \"constraints\": ")
-        write_boost_json([self.constraint_entry(c) for c in self.m.constraints], fh, 4)
+        _write_list(fh, (self._constraint_json(c) for c in self.m.constraints), 4)
         fh.write(",\n    \"mission_decompositions\": ")
         first = True
         quoted = {i: f'            "{k}"' for i, k in self.key.items()}  # keys need no escaping
