@@ -417,12 +417,13 @@ def _literals(room_preds: tuple[str, ...], robot_preds: tuple[str, ...], sizes: 
     """Lists of literals on distinct atoms; the size is drawn from ``sizes`` (shrinks to the
     first); with ``positive_bias`` three out of four literals are positive."""
     polarity = st.sampled_from([True, True, True, False]) if positive_bias else st.booleans()
-    lit = st.builds(lambda a, pos: Lit(a[0], a[1], pos), st.sampled_from(_atoms(room_preds, robot_preds)), polarity)
+    atoms = _atoms(room_preds, robot_preds)
 
     @st.composite
     def draw_list(draw):
-        n = draw(st.sampled_from(sizes))
-        return draw(st.lists(lit, min_size=n, max_size=n, unique_by=lambda l: (l.pred, l.var)))
+        n = min(draw(st.sampled_from(sizes)), len(atoms))
+        chosen = draw(st.permutations(atoms))[:n]  # distinct atoms, no filtering
+        return [Lit(p, v, draw(polarity)) for p, v in chosen]
 
     return draw_list()
 

@@ -73,8 +73,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     exp = mission.expansion
     _ = mission.task_graph
     _ = mission.constraints
-    for w in mission.warnings:
-        print(f"warning: {w}", file=sys.stderr)
+    _warn(args, mission)
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "check", "valid": True, "task_instances": len(exp.instances),
                     "seconds": round(elapsed, 3)},
@@ -159,10 +158,16 @@ def cmd_decompose(args: argparse.Namespace) -> int:
 
     hddl, gm, cfg, folder = _inputs(args)
     start = time.perf_counter()
+    if args.algorithm == "exploratory":
+        used = [o for o, v in (("--optimize", args.optimize), ("--sample", args.sample), ("--explain", args.explain),
+                                ("--limit", args.limit != 1000)) if v]
+        if used:
+            raise MissionError(f"{', '.join(used)} {'needs' if len(used) == 1 else 'need'} the CP-SAT decomposer "
+                               "(the default): drop --algorithm exploratory")
+    if args.sample and (args.optimize or args.limit != 1000):
+        raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
     mission = Mission.load(hddl, gm, cfg)
-    for w in mission.warnings:
-        if not args.quiet:
-            print(f"warning: {w}", file=sys.stderr)
+    _warn(args, mission)
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
     progress = _Progress(not args.quiet, f"mission decompositions: {label}")
     tg = mission.task_graph
@@ -206,10 +211,34 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_graph(args: argparse.Namespace) -> int:
+    from .render import render, view_dot
+
+    hddl, gm, cfg, _folder = _inputs(args)
+    start = time.perf_counter()
+    mission = Mission.load(hddl, gm, cfg)
+    _warn(args, mission)
+    result = render(view_dot(mission, args.view, args.index), args.output)
+    if result.message:
+        print(result.message, file=sys.stderr)
+    elapsed = time.perf_counter() - start
+    _summary(args, {"command": "graph", "view": args.view, "output": str(result.path), "rendered": result.rendered,
+                    "seconds": round(elapsed, 3)},
+             f"graph: {args.view} view written to {result.path} ({elapsed:.2f} s)")
+    return 0
+
+
+def _warn(args: argparse.Namespace, mission: Mission) -> None:
+    if not getattr(args, "quiet", False):
+        for w in mission.warnings:
+            print(f"warning: {w}", file=sys.stderr)
+
+
 def cmd_count(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = _inputs(args)
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg)
+    _warn(args, mission)
     space = mission.decomposition_space(_Progress(not args.quiet, "components solved"), keep=False)
     total = space.count
     elapsed = time.perf_counter() - start
@@ -219,7 +248,8 @@ def cmd_count(args: argparse.Namespace) -> int:
              f"({elapsed:.2f} s)")
     sys.stderr.flush()
     print(total)  # the bare count is the last line of stdout
-    return 0
+    # like decompose: a mission whose tasks admit no valid combination is an error (status 3)
+    return 3 if total == 0 and mission.task_graph.tasks() else 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -263,6 +293,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
     common(p)
     p.set_defaults(func=cmd_count)
+
+    p = sub.add_parser("graph", help="draw the expanded goal model, the Task Graph or one decomposition")
+    common(p)
+    p.add_argument("--view", choices=("goal-model", "task-graph", "decomposition"), default="task-graph")
+    p.add_argument("--index", type=int, default=0, help="decomposition view: which valid decomposition (0-based)")
+    p.add_argument("-o", "--output", required=True, help="FILE.svg, FILE.png (needs graphviz) or FILE.dot")
+    p.set_defaults(func=cmd_graph)
     return parser
 
 

@@ -494,8 +494,8 @@ def decomposition_dot(mission: "Mission", index: int = 0, rankdir: str = "LR") -
     tg = mission.task_graph
     chosen, index, total = _nth(mission, index)
     keys = _output_keys(mission)
-    dot = _new_graph("mission_decomposition", rankdir,
-                     f"valid mission decomposition {index} (indices 0 to {total - 1} of {total})", nodesep="0.25", ranksep="0.5")
+    title = f"valid mission decomposition {index} (indices 0 to {total - 1} of {total})"
+    dot = _new_graph("mission_decomposition", rankdir, title, nodesep="0.25", ranksep="0.5")
     ids = {d: dot.unique(tg.vertices[d].content) for d in chosen}
 
     def node(d: int, indent: int) -> None:
@@ -511,7 +511,8 @@ def decomposition_dot(mission: "Mission", index: int = 0, rankdir: str = "LR") -
                 lines.append(robots)
         binding = inst.binding if inst is not None else {}
         acts = [f"{i}. {_action_text(s, binding)}" for i, s in enumerate(dec.path.actions, 1)] if dec else []
-        dot.node(ids[d], indent, shape="box", label=_left_label(lines, acts), **_filled(TASK_COLOURS, "rounded,filled"))
+        dot.node(ids[d], indent, shape="box", label=_left_label(lines, acts),
+                 **_filled(TASK_COLOURS, "rounded,filled"))
 
     # group by the forAll element when the root is a forAll operator
     root = tg.vertices[0] if tg.vertices else None

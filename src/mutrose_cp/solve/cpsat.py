@@ -19,7 +19,7 @@ from typing import Callable, Iterator, Mapping, Sequence
 
 from ortools.sat.python import cp_model
 
-from ..errors import NoDecompositionError
+from ..errors import MissionError, NoDecompositionError
 from .encoding import FALSE, TRUE, BoolModel, Encoding, Lit, Record
 
 ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
@@ -256,7 +256,8 @@ class DecompositionSpace:
         if not self.encoding.tasks or any(c.count == 0 for c in comps):
             return
         if any(c.solutions is None for c in comps):
-            raise RuntimeError("a component has too many solutions to list; use count or sample")
+            raise MissionError(f"a part of the mission has more than {ENUMERATION_CAP} alternative "
+                               "decompositions on its own: they can be counted (count) but not listed")
         # each component's solutions as decomposition vertices, once; a listed decomposition is
         # then the sorted concatenation of one choice per component
         choices = [[tuple(self.var_to_dec[v] for v in sol) for sol in c.solutions] for c in comps]  # type: ignore[union-attr]
@@ -276,6 +277,11 @@ class DecompositionSpace:
 
     def sample(self, k: int, seed: int) -> list[list[int]]:
         """``k`` decompositions drawn uniformly and independently (with replacement)."""
+        if any(c.solutions is None for c in self.components):
+            raise MissionError(f"a part of the mission has more than {ENUMERATION_CAP} alternative "
+                               "decompositions on its own: uniform sampling needs them listed")
+        if self.count == 0:
+            return []
         rng = random.Random(seed)
         out = []
         for _ in range(k):

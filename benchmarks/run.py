@@ -1,0 +1,221 @@
+"""Run the benchmarks: scaled mission families, both algorithms, time and peak memory.
+
+Every measurement is a separate ``python -m mutrose_cp decompose`` process; its wall time and
+peak resident memory are measured by this parent process (``os.wait4``).  Results go to
+``benchmarks/results/<name>.json``; ``benchmarks/report.py`` turns them into
+``docs/benchmarks.md`` and its plots.
+
+    python benchmarks/run.py --quick          # CI smoke run, under two minutes
+    python benchmarks/run.py                  # the full ladder, median of 3 runs per size
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from generate import REFERENCE, generate  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "benchmarks" / "results"
+
+FULL_LADDER = [2, 3, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000]
+QUICK_LADDER = [2, 5, 10, 50, 200]
+
+# (label, extra arguments, largest n worth running) per family; every run also gets
+# ``-q --json-summary -o <tmp>``.
+RUNS = {
+    "delivery": [
+        ("exploratory", ["--algorithm", "exploratory"], 12),
+        ("cpsat", [], None),  # exact count + the first 1000 decompositions
+        ("cpsat-all", ["--limit", "0"], 10),  # every decomposition written
+        ("cpsat-optimize", ["--optimize"], None),
+    ],
+    "pickup": [
+        ("exploratory", ["--algorithm", "exploratory"], 10),
+        ("cpsat", [], None),
+    ],
+    "vital-signs": [
+        ("exploratory", ["--algorithm", "exploratory"], None),
+        ("cpsat", ["--limit", "1"], None),
+    ],
+}
+
+# the dissertation's own worlds (reference/scalability): index -> n
+DISSERTATION = {
+    "delivery": ("scalability/food-logistics-delivery", "configurationDelivery{i}.json", "FoodLogisticsDelivery.txt",
+                 [2, 3, 5, 10, 11, 12, 15, 20]),
+    "pickup": ("scalability/food-logistics-pickup", "configurationPickup{i}.json", "FoodLogisticsPickup.txt",
+               [2, 3, 5, 10, 20, 50, 100, 200, 1000, 2000, 3000, 4000, 5000]),
+    "vital-signs": ("scalability/vital-signs-monitoring", "configuration{i}.json", "VitalSignsMonitoring.txt",
+                    [2, 3, 5, 10, 20, 50, 100, 200, 1000, 2000, 3000, 4000, 5000]),
+}
+
+
+def measure(cmd: list[str], cwd: Path, timeout: float) -> dict:
+    """Run ``cmd`` as a child process; wall time, peak RSS (MB), exit status and summary."""
+    start = time.perf_counter()
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        proc = subprocess.Popen(cmd, cwd=cwd, stdout=out, stderr=err)
+        deadline = start + timeout
+        status, rusage = 0, None
+        while True:
+            pid, status, rusage = os.wait4(proc.pid, os.WNOHANG)
+            if pid:
+                break
+            if time.perf_counter() > deadline:
+                proc.kill()
+                _, status, rusage = os.wait4(proc.pid, 0)
+                return {"status": "timeout", "seconds": round(time.perf_counter() - start, 3),
+                        "peak_mb": round(rusage.ru_maxrss / 1024, 1)}
+            time.sleep(0.01)
+        wall = time.perf_counter() - start
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        stdout, stderr = out.read().decode(), err.read().decode()
+    result = {"status": "ok" if proc.returncode == 0 else f"exit {proc.returncode}",
+              "seconds": round(wall, 3), "peak_mb": round(rusage.ru_maxrss / 1024, 1)}
+    lines = [l for l in stdout.splitlines() if l.startswith("{")]
+    if lines:
+        summary = json.loads(lines[-1])
+        result.update(task_instances=summary.get("task_instances"), constraints=summary.get("constraints"),
+                      mission_decompositions=summary.get("mission_decompositions"))
+    elif proc.returncode != 0:
+        result["error"] = stderr.strip().splitlines()[-1:] if stderr.strip() else []
+    return result
+
+
+def _digits(count: str | None) -> str | None:
+    """Counts can have thousands of digits: keep them short in the results."""
+    if count is None or len(count) <= 15:
+        return count
+    return f"{count[0]}.{count[1:4]}e{len(count) - 1}"
+
+
+def run_family(family: str, ladder: list[int], repeats: int, timeout: float, work: Path, log) -> list[dict]:
+    rows = []
+    stopped: set[str] = set()
+    for n in ladder:
+        hddl, gm, cfg = generate(family, n, work / family)
+        for label, extra, max_n in RUNS[family]:
+            if label in stopped or (max_n is not None and n > max_n):
+                continue
+            out = work / f"{family}-{n}-{label}.out"
+            cmd = [sys.executable, "-m", "mutrose_cp", "decompose", str(hddl), str(gm), str(cfg), "-q",
+                   "--json-summary", "-o", str(out), *extra]
+            samples = []
+            for _ in range(repeats):
+                r = measure(cmd, ROOT, timeout)
+                samples.append(r)
+                if r["status"] != "ok":
+                    break
+            out.unlink(missing_ok=True)
+            ok = [s for s in samples if s["status"] == "ok"]
+            row = {"family": family, "n": n, "algorithm": label, "runs": len(samples),
+                   "status": "ok" if len(ok) == len(samples) else samples[-1]["status"]}
+            if ok:
+                row["seconds"] = statistics.median(s["seconds"] for s in ok)
+                row["peak_mb"] = statistics.median(s["peak_mb"] for s in ok)
+                row["task_instances"] = ok[0].get("task_instances")
+                row["constraints"] = ok[0].get("constraints")
+                row["mission_decompositions"] = _digits(ok[0].get("mission_decompositions"))
+            else:
+                row.update(seconds=samples[-1]["seconds"], peak_mb=samples[-1]["peak_mb"],
+                           error=samples[-1].get("error"))
+                stopped.add(label)  # the ladder stops for this algorithm
+            rows.append(row)
+            log(f"{family:12} n={n:<6} {label:15} {row['status']:8} {row.get('seconds', 0):8.2f} s "
+                f"{row.get('peak_mb', 0):8.1f} MB  decompositions={row.get('mission_decompositions')}")
+    return rows
+
+
+def run_dissertation(family: str, repeats: int, timeout: float, log, quick: bool) -> list[dict]:
+    folder, template, gm_name, sizes = DISSERTATION[family]
+    src = REFERENCE / folder
+    hddl = next((src / "hddl").glob("*.hddl"))
+    rows = []
+    for i, n in enumerate(sizes):
+        if quick and n > 10:
+            break
+        cfg = src / "configuration" / template.format(i=i)
+        if not cfg.exists():
+            continue
+        for label, extra in (("exploratory", ["--algorithm", "exploratory"]), ("cpsat", [])):
+            with tempfile.TemporaryDirectory() as tmp:
+                cmd = [sys.executable, "-m", "mutrose_cp", "decompose", str(hddl), str(src / "gm" / gm_name),
+                       str(cfg), "-q", "--json-summary", "-o", str(Path(tmp) / "out.json"), *extra]
+                samples = [measure(cmd, src, timeout) for _ in range(repeats)]
+            ok = [s for s in samples if s["status"] == "ok"]
+            row = {"family": f"dissertation-{family}", "n": n, "algorithm": label, "runs": len(samples),
+                   "status": "ok" if len(ok) == len(samples) else samples[-1]["status"]}
+            if ok:
+                row.update(seconds=statistics.median(s["seconds"] for s in ok),
+                           peak_mb=statistics.median(s["peak_mb"] for s in ok),
+                           task_instances=ok[0].get("task_instances"),
+                           mission_decompositions=_digits(ok[0].get("mission_decompositions")))
+            rows.append(row)
+            log(f"{row['family']:24} n={n:<6} {label:12} {row['status']:8} {row.get('seconds', 0):8.2f} s "
+                f"tasks={row.get('task_instances')} decompositions={row.get('mission_decompositions')}")
+    return rows
+
+
+def machine() -> dict:
+    info = {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count()}
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                info["cpu"] = line.split(":", 1)[1].strip()
+                break
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemTotal"):
+                info["memory_gb"] = round(int(line.split()[1]) / 1024 / 1024, 1)
+    except OSError:
+        pass
+    return info
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small ladder, one run per size (CI smoke test)")
+    parser.add_argument("--families", nargs="*", default=list(RUNS), choices=list(RUNS))
+    parser.add_argument("--max-n", type=int, help="stop the ladder at this size")
+    parser.add_argument("--repeats", type=int, help="runs per size (median); default 3, 1 with --quick")
+    parser.add_argument("--timeout", type=float, help="per-run time limit in seconds (default 120, 30 with --quick)")
+    parser.add_argument("--no-dissertation", action="store_true", help="skip the dissertation's own worlds")
+    args = parser.parse_args(argv)
+    ladder = QUICK_LADDER if args.quick else FULL_LADDER
+    if args.max_n:
+        ladder = [n for n in ladder if n <= args.max_n]
+    repeats = args.repeats or (1 if args.quick else 3)
+    timeout = args.timeout or (30.0 if args.quick else 120.0)
+    name = "quick" if args.quick else "full"
+    started = time.time()
+    rows: list[dict] = []
+    with tempfile.TemporaryDirectory(prefix="mutrose-bench-") as tmp:
+        for family in args.families:
+            rows += run_family(family, ladder, repeats, timeout, Path(tmp), lambda m: print(m, flush=True))
+            if not args.no_dissertation:
+                rows += run_dissertation(family, repeats, timeout, lambda m: print(m, flush=True), args.quick)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    result = {"name": name, "machine": machine(), "repeats": repeats, "timeout_s": timeout,
+              "date": time.strftime("%Y-%m-%d", time.gmtime(started)),
+              "elapsed_s": round(time.time() - started, 1), "rows": rows}
+    path = RESULTS / f"{name}.json"
+    path.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
+    failed = [r for r in rows if r["status"] not in ("ok", "timeout")]
+    print(f"wrote {path} ({len(rows)} measurements, {result['elapsed_s']} s); "
+          f"{len(failed)} failed runs", flush=True)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
