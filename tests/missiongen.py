@@ -568,7 +568,17 @@ def missions(draw) -> MissionSpec:
     robot_preds = tuple(draw(st.lists(st.sampled_from(ROBOT_PREDICATES), min_size=max(0, 2 - len(room_preds)),
                                       max_size=min(2, 4 - len(room_preds)), unique=True)))
     n_actions = draw(st.integers(1, 4))
-    actions = tuple(draw(_action(f"act{i}", room_preds, robot_preds)) for i in range(n_actions))
+    actions_list: list[Action] = []
+    for i in range(n_actions):
+        act = draw(_action(f"act{i}", room_preds, robot_preds))
+        # sometimes undo a room effect of an earlier action: parallel conflicts, set/unset chains
+        undoable = [e for prev in actions_list for e in prev.eff if isinstance(e, Lit) and e.var == "?rm"]
+        if undoable and draw(st.integers(0, 1)) == 0:
+            e = draw(st.sampled_from(undoable))
+            if all(not (isinstance(x, Lit) and x.pred == e.pred and x.var == e.var) for x in act.eff):
+                act = Action(act.name, act.pre, act.eff + (Lit(e.pred, e.var, not e.positive),))
+        actions_list.append(act)
+    actions = tuple(actions_list)
     n_tasks = draw(st.integers(1, len(TASK_NAMES)))
     tasks: list[Task] = []
     bounds: dict[str, int] = {}

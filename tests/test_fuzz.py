@@ -1,9 +1,11 @@
 """Property tests: every reader either returns its model or raises a located ``MissionError``.
 
-Each parser is fed mutated versions of the real example files (bytes deleted, inserted or
-replaced at random positions, truncations) and random text over an alphabet that looks like
-its grammar.  Any exception other than :class:`~mutrose_cp.errors.MissionError` fails the
-property: bad input must end in a message, never in a traceback.
+Each parser is fed mutated versions of the real example files (characters or bytes deleted,
+inserted or replaced at random positions, truncations) and random text over an alphabet that
+looks like its grammar.  Any exception other than :class:`~mutrose_cp.errors.MissionError` fails
+the property: bad input must end in a message, never in a traceback.  One end-to-end property
+runs ``check`` and ``decompose`` on example missions whose world was mutated (booleans flipped,
+fields and records deleted): the exit status is 0, 2 or 3 and no traceback is printed.
 
 The default run is short (about 150 examples per property).  ``HYPOTHESIS_PROFILE=nightly``
 runs ten times more; the settings objects live in this file (the shared conftest is not
@@ -13,12 +15,13 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import random
+import shutil
 import tempfile
 from pathlib import Path
 
-import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from lxml import etree
@@ -78,8 +81,6 @@ WORLD_FILES = _example_files("knowledge/*.xml")
 def _xml_configuration(json_text: str) -> str:
     """The XML form (spec config-and-knowledge.md §3) of a JSON example configuration, so that
     the XML reader is fuzzed from a valid document as well."""
-    import json
-
     data = json.loads(json_text)
     lines = ["<configuration>"]
     for section in ("world_db", "output"):
@@ -312,8 +313,6 @@ def test_file_readers_never_crash_on_corrupt_bytes(case):
 
 def _gm_expressions() -> list[tuple[str, str]]:
     """Every expression of the example goal models, by kind."""
-    import json
-
     out: list[tuple[str, str]] = []
     for _name, text in GM_FILES:
         for actor in json.loads(text)["actors"]:
@@ -414,8 +413,6 @@ def _run_cli(argv: list[str]) -> tuple[int, str]:
 @END_TO_END_SETTINGS
 @given(mutated_world())
 def test_mutated_world_check_and_decompose(case):
-    import shutil
-
     folder, world = case
     with tempfile.TemporaryDirectory() as tmp:
         mission = Path(tmp) / folder.name

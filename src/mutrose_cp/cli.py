@@ -32,22 +32,29 @@ def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
 
 
 class _Progress:
-    """A progress line on an interactive stderr; silent when redirected or ``--quiet``."""
+    """Progress lines on an interactive stderr; silent when redirected or ``--quiet``.
 
-    def __init__(self, enabled: bool, label: str) -> None:
+    Called as ``progress(done, total)`` for its own label, or through :meth:`stage` as
+    ``(label, done, total)`` by the pipeline."""
+
+    def __init__(self, enabled: bool, label: str = "") -> None:
         self.enabled = enabled and sys.stderr.isatty()
         self.label = label
         self.last = 0.0
 
     def __call__(self, done: int, total: int) -> None:
+        self.stage(self.label, done, total)
+
+    def stage(self, label: str, done: int, total: int) -> None:
         if not self.enabled:
             return
         now = time.monotonic()
         if now - self.last < 0.1 and done < total:
             return
         self.last = now
-        sys.stderr.write(f"\r{self.label}: {done}/{total}")
-        if done >= total:
+        of = f"/{total}" if total else ""
+        sys.stderr.write(f"\r\033[K{label}: {done}{of}")
+        if total and done >= total:
             sys.stderr.write("\n")
         sys.stderr.flush()
 
@@ -167,6 +174,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     if args.sample and (args.optimize or args.limit != 1000):
         raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
     mission = Mission.load(hddl, gm, cfg)
+    mission.progress = _Progress(not args.quiet).stage
     _warn(args, mission)
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
     progress = _Progress(not args.quiet, f"mission decompositions: {label}")
@@ -185,8 +193,18 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     if args.ihtn:
         from .ihtn import write_ihtns
 
+        from .ihtn import IHTN_WARNING
+
         model.decompositions = list(decompositions)
-        n_files = write_ihtns(model, Path(args.ihtn))
+        ihtn_progress = _Progress(not args.quiet, "iHTN files written")
+
+        def on_file(n: int) -> None:
+            ihtn_progress(n, 0)
+            if n == IHTN_WARNING and not args.quiet:
+                print(f"\nwarning: more than {IHTN_WARNING} iHTN files: one is written per ordering of each "
+                      "valid decomposition; --optimize or --limit K writes fewer", file=sys.stderr)
+
+        n_files = write_ihtns(model, Path(args.ihtn), on_file)
     else:
         n_files = 0
         write_output(model, out_path, file_type)

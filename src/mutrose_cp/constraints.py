@@ -188,7 +188,10 @@ def _check_robot_numbers(tg: TaskGraph, constraints: list[Constraint]) -> None:
         if not ok:
             raise MissionError(
                 f"Wrong robot number for execution constrained tasks [{tg.vertices[c.first].content}] and "
-                f"[{tg.vertices[c.second].content}]: they share robots, so their RobotNumber values must overlap"
+                f"[{tg.vertices[c.second].content}]: they share robots (a Group=False or Divisible=False goal "
+                f"above them), so their RobotNumber values must overlap; set RobotNumber on {a.gm_task} or "
+                f"{b.gm_task} to agree",
+                f"goal model: tasks {a.gm_task} and {b.gm_task}",
             )
 
 

@@ -12,7 +12,7 @@ original does; nested operators of one annotation belong to the same goal and sh
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Callable, Mapping
 
 from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
 from .errors import MissionError
@@ -80,7 +80,9 @@ def infer_robot_number(domain: Domain, task_name: str) -> RobotNumber:
 
 
 class _Walker:
-    def __init__(self, gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge) -> None:
+    def __init__(self, gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge,
+                 progress: Callable[[int, int], None] | None = None) -> None:
+        self.progress = progress
         self.gm = gm
         self.domain = domain
         self.config = config
@@ -155,10 +157,13 @@ class _Walker:
             return RatNode(GOAL, node.id, node.key, var_maps=self._snapshot())
         self.counters[depth] = 1
         copies: list[RatNode] = []
+        outermost = len(self.counters) == 1
         for i, (value, record) in enumerate(elements):
             self.counters[depth] = i + 1
             self.bindings[fa.iteration] = Binding(value, it_type, (record,))
             copies.append(self._expand(node, depth))
+            if outermost and self.progress is not None:
+                self.progress(i + 1, len(elements))
         if len(copies) == 1:
             return copies[0]
         return RatNode(OPERATOR, "#", "", copies, True, True, False, self._snapshot(), is_forall_dummy=True)
@@ -232,9 +237,11 @@ class _Walker:
         return RatNode(TASK, inst_id, node.key, var_maps=self._snapshot())
 
 
-def expand(gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge) -> Expansion:
-    """Expand the goal model against the world: task instances and the runtime annotation tree."""
-    walker = _Walker(gm, domain, config, world)
+def expand(gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge,
+           progress: Callable[[int, int], None] | None = None) -> Expansion:
+    """Expand the goal model against the world: task instances and the runtime annotation tree
+    (``progress`` is told how many instances of the outermost forAll are done)."""
+    walker = _Walker(gm, domain, config, world, progress)
     rat = walker.walk(gm.node(gm.root), 0)
     forall = {n.id: n for n in gm.nodes if n.forall is not None}
     return Expansion(walker.instances, rat, walker.bindings, forall)

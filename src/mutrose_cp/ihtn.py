@@ -151,7 +151,10 @@ def _tree_json(nodes: dict[str, dict], node: TreeNode, parent: str, d: int, agen
     return key
 
 
-def write_ihtns(model: OutputModel, folder: Path) -> int:
+IHTN_WARNING = 10_000
+
+
+def write_ihtns(model: OutputModel, folder: Path, progress=None) -> int:
     """Write ``ihtn_<n>.json`` files into ``folder`` (old ``ihtn_*.json`` there are removed)."""
     tg = model.tg
     succ: dict[int, set[int]] = {}
@@ -185,4 +188,6 @@ def write_ihtns(model: OutputModel, folder: Path) -> int:
             with atomic_writer(folder / f"ihtn_{count}.json") as fh:
                 write_boost_json(nodes, fh)
                 fh.write("\n")
+            if progress is not None:
+                progress(count)
     return count

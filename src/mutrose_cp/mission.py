@@ -82,6 +82,8 @@ class Mission:
     knowledge: WorldKnowledge
     config_path: Path
     warnings: list[str] = field(default_factory=list)
+    # optional progress reporter for long stages: called with (stage, done, total)
+    progress: Callable[[str, int, int], None] | None = None
 
     @classmethod
     def load(cls, hddl: str | os.PathLike, gm: str | os.PathLike, config: str | os.PathLike) -> "Mission":
@@ -120,7 +122,14 @@ class Mission:
 
     @cached_property
     def expansion(self) -> Expansion:
-        return expand(self.goal_model, self.domain, self.config, self.knowledge)
+        report = None
+        if self.progress is not None:
+            progress = self.progress
+
+            def report(done: int, total: int) -> None:
+                progress("expanding the goal model: forAll instances", done, total)
+
+        return expand(self.goal_model, self.domain, self.config, self.knowledge, report)
 
     @cached_property
     def paths(self) -> dict[str, list[HtnPath]]:
