@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
 
 FULL_LADDER = [2, 3, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000]
-QUICK_LADDER = [2, 5, 10, 50, 200]
+QUICK_LADDER = [2, 10, 100]
 
 # (label, extra arguments, largest n worth running) per family; every run also gets
 # ``-q --json-summary -o <tmp>``.
@@ -144,7 +144,7 @@ def run_dissertation(family: str, repeats: int, timeout: float, log, quick: bool
     hddl = next((src / "hddl").glob("*.hddl"))
     rows = []
     for i, n in enumerate(sizes):
-        if quick and n > 10:
+        if quick and n > 3:
             break
         cfg = src / "configuration" / template.format(i=i)
         if not cfg.exists():

@@ -433,7 +433,7 @@ NUMERIC_PRECONDITIONS = (Cmp(">", 0), Cmp("=", 1), Cmp("=", 0), Cmp(">", 1))
 
 @st.composite
 def _action(draw, name: str, room_preds, robot_preds) -> Action:
-    pre = draw(_literals(room_preds, robot_preds, (0, 0, 0, 1, 1, 2)))
+    pre = draw(_literals(room_preds, robot_preds, (0, 0, 0, 1, 1)))
     eff: list = draw(_literals(room_preds, robot_preds, (1, 0, 1, 2), positive_bias=True))
     change = draw(st.sampled_from([None, None, "increase", "decrease"]))
     if change:
@@ -462,7 +462,7 @@ def _method_precondition(draw, switch: Lit, room_preds, robot_preds) -> list:
     if kind == 2:
         return [Lit(switch.pred, switch.var, not switch.positive)]
     if kind == 3:
-        return draw(_literals(room_preds, robot_preds, (1, 2)))
+        return draw(_literals(room_preds, robot_preds, (1, 1, 2)))
     if kind == 4:
         return [draw(st.sampled_from(NUMERIC_PRECONDITIONS))]
     return draw(_literals(room_preds, robot_preds, (1,))) + [draw(st.sampled_from(NUMERIC_PRECONDITIONS))]

@@ -92,7 +92,7 @@ def _bucket(n: int) -> str:
 # Random missions
 
 
-@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(missions())
 def test_agree_on_random_missions(spec: MissionSpec):
     note(spec.summary())

@@ -50,12 +50,29 @@ class TreeNode:
 
 
 @dataclass(frozen=True)
+class Fragment:
+    """A cyclic fragment of a path (steps ``start..end``) repeated while ``function(args) > bound``;
+    each repetition changes the function by ``decrease`` (negative)."""
+
+    start: int
+    end: int
+    function: str
+    args: tuple[str, ...]
+    bound: int | float
+    decrease: int | float
+
+
+@dataclass(frozen=True)
 class Path:
     """One decomposition path of an abstract task."""
 
     steps: tuple[Step, ...]
     tree: TreeNode  # the root task node with its chosen method subtree
-    needs_expansion: bool = False
+    fragments: tuple[Fragment, ...] = ()  # recursive-method fragments to expand (§7.6)
+
+    @property
+    def needs_expansion(self) -> bool:
+        return bool(self.fragments)
 
     @property
     def actions(self) -> tuple[Step, ...]:
@@ -242,7 +259,13 @@ def _renamed_step(action: Action, mapping: Mapping[str, str]) -> Step:
 class _Partial:
     steps: list[Step]
     trees: list[TreeNode]
-    expansion: bool = False
+    fragments: list[Fragment] = field(default_factory=list)
+
+    def then(self, other: "_Partial") -> "_Partial":
+        """This path followed by ``other`` (whose fragment indices shift)."""
+        n = len(self.steps)
+        shifted = [Fragment(f.start + n, f.end + n, f.function, f.args, f.bound, f.decrease) for f in other.fragments]
+        return _Partial(self.steps + other.steps, self.trees + other.trees, self.fragments + shifted)
 
 
 class _PathGenerator:
@@ -286,7 +309,7 @@ class _PathGenerator:
                                   (TreeNode("method", method.name,
                                             _rename([p.name for p in method.parameters], m_map),
                                             tuple(partial.trees)),))],
-                        partial.expansion,
+                        partial.fragments,
                     )
                 )
         return out
@@ -297,7 +320,8 @@ class _PathGenerator:
             state = incoming.copy()
             child_lists: list[list[_Partial]] = []
             failed = False
-            expansion = False
+            fragments: list[Fragment] = []
+            recursive = any(c[0] == m.parent for c in m.children)  # a cycle with the direct parent task
             for k, idx in enumerate(order):
                 vid, args, _sid = m.children[idx]
                 child = self.tdg.vertices[vid]
@@ -306,7 +330,8 @@ class _PathGenerator:
                     assert action is not None
                     mapping = {p.name: mu[a] for p, a in zip(action.parameters, args) if a in mu}
                     step = _renamed_step(action, mapping)
-                    ok, assumed, guard = self._check(step, state, self._later_steps(m, order[k + 1:], mu))
+                    later = self._later_steps(m, order[k + 1:], mu)
+                    ok, assumed, guards = self._check(step, state, later)
                     if not ok:
                         failed = True
                         break
@@ -314,7 +339,8 @@ class _PathGenerator:
                         state.facts[key] = val
                     for key, val in assumed[1]:
                         state.values[key] = val
-                    expansion = expansion or guard
+                    if step.pseudo and recursive:
+                        fragments += self._fragments(m, guards, later)
                     state.apply(step)
                     child_lists.append(
                         [_Partial([step], [] if step.pseudo else [TreeNode("action", step.name, step.args)])]
@@ -330,24 +356,41 @@ class _PathGenerator:
                 if not lst:
                     continue  # an abstract subtask without executable method disappears (quirk)
                 if not combined:
-                    combined = [_Partial(list(p.steps), list(p.trees), p.expansion) for p in lst]
+                    combined = [_Partial(list(p.steps), list(p.trees), list(p.fragments)) for p in lst]
                     continue
-                combined = [
-                    _Partial(p.steps + q.steps, p.trees + q.trees, p.expansion or q.expansion)
-                    for q in lst
-                    for p in combined
-                ]
+                combined = [p.then(q) for q in lst for p in combined]
             if not combined:
                 combined = [_Partial([], [])]
             for p in combined:
-                p.expansion = p.expansion or expansion
+                p.fragments = fragments + p.fragments
             results.extend(combined)
         return results
+
+    def _fragments(self, m: _Vertex, guards: list[tuple], later: list[Step]) -> list[Fragment]:
+        """Expansion metadata of a recursive method whose ``>`` guard was assumed (hddl.md §7)."""
+        out = []
+        method = m.method
+        assert method is not None
+        for key, bound in guards:
+            effects = [n for s in later for n in s.numeric_effects if (n.function, n.args) == key]
+            if not effects:
+                continue
+            if any(n.kind == "assign" for n in effects):
+                raise MissionError(f"Assignment expressions on expansion cycle are not allowed (method "
+                                   f"{method.name}): the recursion must decrease {key[0]}",
+                                   f"{self.domain.source}:{method.line}:{method.column}")
+            delta = sum(n.amount if n.kind == "increase" else -n.amount for n in effects)
+            if delta >= 0:
+                raise MissionError(f"Infinite expansion generated with method [{method.name}]: its actions "
+                                   f"must decrease {key[0]}, which guards the recursion",
+                                   f"{self.domain.source}:{method.line}:{method.column}")
+            out.append(Fragment(0, len(m.children) - 2, key[0], key[1], bound, delta))
+        return out
 
     def _check(self, step: Step, state: _State, later: list[Step]):
         """Check a primitive step's preconditions against ``state`` with the original's quirks.
 
-        Returns ``(executable, (facts, values) to assume, expansion guard)``.  A numeric
+        Returns ``(executable, (facts, values) to assume, assumed ">" guards)``.  A numeric
         comparison with a known value *overwrites* the executable flag (the original's bug, which
         the reference outputs depend on); the ``not`` of a comparison is ignored.  Unknown facts
         are assumed; a ``>`` guard is assumed at ``N - sum of later decrements`` so that a
@@ -355,7 +398,7 @@ class _PathGenerator:
         executable = True
         facts: list = []
         values: list = []
-        guard = False
+        guards: list = []
         for c in step.preconditions:
             if isinstance(c, Literal):
                 key = (c.predicate, c.args)
@@ -375,10 +418,10 @@ class _PathGenerator:
                         if (n.function, n.args) == key and n.kind != "assign"
                     )
                     values.append((key, c.value - delta))
-                    guard = guard or delta < 0
+                    guards.append((key, c.value))
                 else:
                     values.append((key, c.value))
-        return executable, (facts, values), guard
+        return executable, (facts, values), guards
 
     def _later_steps(self, m: _Vertex, positions: list[int], mu: dict[str, str]) -> list[Step]:
         """The renamed primitive steps that follow in the ordering (for ``>`` guards)."""
@@ -399,7 +442,7 @@ def task_paths(domain: Domain, task: str) -> list[Path]:
     root = domain.task_by_name[task]
     identity = {p.name: p.name for p in root.parameters}
     return [
-        Path(tuple(p.steps), p.trees[0], p.expansion)
+        Path(tuple(p.steps), p.trees[0], tuple(sorted(p.fragments, key=lambda f: f.start)))
         for p in gen.task_paths(tdg.root.id, _State(), identity, 0)
     ]
 
@@ -497,3 +540,37 @@ def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
         effects=tuple(effects),
         numeric_effects=tuple((f, a, k, v) for (f, a), (k, v) in numeric.items()) + tuple(free_numeric),
     )
+
+
+def expand_path(path: Path, binding: Mapping[str, Value], value_of, where: str) -> Path:
+    """Repeat the recursive fragments of ``path`` as often as the world allows (§7.6).
+
+    ``value_of(function, args)`` gives the function's value (None if unknown).  For the guard
+    ``f > N`` with a decrease ``d`` per repetition and a current value ``v``, the fragment is
+    inserted ``k`` more times after itself, with k as the original computes it."""
+    steps = list(path.steps)
+    offset = 0
+    for frag in path.fragments:
+        grounds = _groundings(frag.args, binding)
+        if grounds is None or len(grounds) != 1:
+            raise MissionError(f"Function predicate in task {where} cannot contain collection-related variables "
+                               f"({frag.function} {' '.join(frag.args)})", where)
+        v = value_of(frag.function, grounds[0])
+        if v is None:
+            raise MissionError(f"Failed to expand decomposition [{where}]: the world gives no value for "
+                               f"{frag.function}({', '.join(grounds[0])}), which controls a recursive method", where)
+        n = frag.bound
+        if isinstance(v, int) and isinstance(n, int):
+            k = (v - n) // int(-frag.decrease) - 1
+        elif isinstance(v, int):
+            k = v - (int(n) + 1) - 1
+        elif isinstance(n, int):
+            k = (int(v) + 1) - n - 1
+        else:
+            k = int(v - n) + 1 - 1
+        start, end = frag.start + offset, frag.end + offset
+        block = steps[start:end + 1]
+        if k > 0:
+            steps[end + 1:end + 1] = block * k
+            offset += len(block) * k
+    return Path(tuple(steps), path.tree, ())

@@ -17,7 +17,7 @@ from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
 from .conditions import Test, holds, translate
 from .errors import MissionError
 from .expansion import Expansion, TaskInstance
-from .htn import GroundPredicates, Path, ground_path
+from .htn import GroundPredicates, Path, expand_path, ground_path
 from .io.config import Configuration
 from .io.goal_model import GoalModel
 from .query import Binding
@@ -432,6 +432,22 @@ def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state
     _final_context_edges(tg, builder.cd_edges)
     _execution_constraint_edges(tg)
     if _is_unique_branch(tg):
-        tg.unique_branch = True
+        tg.unique_branch = True  # the original neither trims nor expands these (§7.7)
         return tg
+    _expand_recursions(tg, state)
     return _trim(tg)
+
+
+def _expand_recursions(tg: TaskGraph, state: InitialState) -> None:
+    """Unroll recursive methods as often as the initial world state asks (§7.6).
+
+    The original computes the repetitions from the world state at the point where the
+    decomposition is accepted; here the initial state is used, so that the decomposition does
+    not depend on the combination (docs/deviations.md)."""
+    for v in tg.vertices:
+        dec = v.decomposition
+        if v.kind != DECOMPOSITION or dec is None or not dec.path.needs_expansion:
+            continue
+        binding = dec.instance.binding
+        path = expand_path(dec.path, binding, state.function_value, dec.id)
+        v.decomposition = Decomposition(dec.id, dec.instance, dec.number, path, ground_path(path, binding))
