@@ -1,0 +1,44 @@
+"""Missions larger than the reference corpus, from the benchmark generator: every entity of the
+world produces its tasks, and both algorithms agree."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import require_reference
+
+from mutrose_cp.mission import Mission
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+from generate import generate  # noqa: E402
+
+
+def _ids(mission: Mission, decompositions) -> set[frozenset[str]]:
+    key = {d.index: d.content for d in mission.task_graph.decompositions()}
+    return {frozenset(key[d] for d in md) for md in decompositions}
+
+
+def test_vital_signs_with_several_occupied_rooms(tmp_path):
+    require_reference()
+    mission = Mission.load(*generate("vital-signs", 3, tmp_path))
+    instances = {i.id for i in mission.expansion.instances}
+    # every occupied room gets its room tasks, and every patient of it its patient tasks
+    for room in (1, 2, 3):
+        assert f"AT1_{room}" in instances
+        for patient in (1, 2):
+            assert f"AT2_{room}_{patient}" in instances and f"AT4_{room}_{patient}" in instances
+    locations = {i.location for i in mission.expansion.instances if i.gm_task == "AT1"}
+    assert locations == {"Room0", "Room1", "Room2"}
+    space = mission.decomposition_space()
+    assert _ids(mission, mission.exploratory()) == _ids(mission, space)
+    assert space.count >= 1
+
+
+@pytest.mark.parametrize("family,n,count", [("delivery", 4, 3 ** 4), ("pickup", 3, 4 ** 3)])
+def test_food_logistics_counts(tmp_path, family, n, count):
+    require_reference()
+    mission = Mission.load(*generate(family, n, tmp_path))
+    space = mission.decomposition_space()
+    assert space.count == count
+    assert _ids(mission, mission.exploratory()) == _ids(mission, space)
