@@ -15,6 +15,7 @@ import itertools
 from dataclasses import dataclass, field
 from typing import Iterator, Mapping, Sequence
 
+from .conditions import compare
 from .errors import MissionError
 from .io.hddl import Action, Comparison, Domain, Literal, Method, NumericEffect
 
@@ -218,17 +219,6 @@ class _State:
             else:
                 delta = ne.amount if ne.kind == "increase" else -ne.amount
                 self.values[key] = self.values[key] + delta if key in self.values else delta
-
-
-def compare(value: int | float, op: str, bound: int | float) -> bool:
-    """The original's numeric comparison: ``=`` with a small epsilon, or ``>``."""
-    if op == "=":
-        return abs(value - bound) < 1e-9
-    if op == ">":
-        return value > bound
-    if op == "<":
-        return value < bound
-    raise ValueError(op)
 
 
 def _rename(args: Sequence[str], mapping: Mapping[str, str]) -> tuple[str, ...]:

@@ -16,14 +16,23 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Iterable, Sequence
 
-from ..conditions import AllOf, AnyOf, FactTest, Test, ValueTest
-from ..constraints import EC, SEQ, Constraint
+from ..conditions import AllOf, AnyOf, FactTest, Test, ValueTest, compare
+from ..constraints import Constraint
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Comparison, Domain, Literal
 from ..taskgraph import ATASK, OP, TaskGraph
 from ..world import InitialState
-from .semantics import Effects, achieve_test, effects_of, robot_preconditions, translate_robot_effects
+from .semantics import (
+    ConstraintIndex,
+    Effects,
+    achieve_test,
+    effects_of,
+    ground_preconditions_hold,
+    initial_state,
+    robot_preconditions,
+    translate_robot_effects,
+)
 
 TRUE = "TRUE"
 FALSE = "FALSE"
@@ -154,21 +163,11 @@ class Encoder:
         self.config = config
         self.explain = explain
         self.m = BoolModel()
-        self.facts: dict = {}
-        for lit in initial.literals:
-            self.facts.setdefault((lit.predicate, lit.args), lit.positive)
-        self.values: dict = {}
-        for key, value in initial.functions:
-            self.values.setdefault(key, value)
+        self.initial = initial_state(initial)
+        self.facts, self.values = self.initial.facts, self.initial.values
         self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
-        self.ec: dict[int, set[int]] = {}
-        self.seq_after: dict[int, set[int]] = {}
-        for c in constraints:
-            if c.kind == EC:
-                self.ec.setdefault(c.first, set()).add(c.second)
-                self.ec.setdefault(c.second, set()).add(c.first)
-            elif c.kind == SEQ:
-                self.seq_after.setdefault(c.first, set()).add(c.second)
+        index = ConstraintIndex.of(constraints)
+        self.ec, self.seq_after = index.ec, index.seq_after
         self.x: dict[int, Lit] = {}
         self.active: dict[int, Lit] = {}
         self.or_lits: dict[tuple[int, int], Lit] = {}
@@ -228,18 +227,7 @@ class Encoder:
         return ""
 
     def _initially_valid(self, d: int) -> bool:
-        for c in self.tg.vertices[d].decomposition.predicates.preconditions:
-            if any(a.startswith("?") for a in c.args):
-                continue
-            if isinstance(c, Literal):
-                known = self.facts.get((c.predicate, c.args))
-                if known is not None and known != c.positive:
-                    return False
-            else:
-                v = self.values.get((c.function, c.args))
-                if v is not None and not (abs(v - c.value) < 1e-9 if c.op == "=" else v > c.value):
-                    return False
-        return True
+        return ground_preconditions_hold(self.tg.vertices[d].decomposition, self.initial)
 
     # --- choices ---------------------------------------------------------------------------------
     def _choices(self, v: int, active: Lit) -> None:
@@ -318,7 +306,7 @@ class Encoder:
         if not writers:
             if init is None:
                 return TRUE
-            return TRUE if _compare(init, op, bound) else FALSE
+            return TRUE if compare(init, op, bound) else FALSE
         m = self.m
         scaled = [(w, kind, round(amount * SCALE)) for w, kind, amount in writers]
         span = sum(abs(a) for _, _, a in scaled) + abs(round((init or 0) * SCALE)) + 1
@@ -469,12 +457,6 @@ def _show_test(test: Test) -> str:
         return f"{test.function}({', '.join(test.args)}) {test.op} {test.value:g}"
     joiner = " and " if isinstance(test, AllOf) else " or "
     return "(" + joiner.join(_show_test(p) for p in test.parts) + ")"
-
-
-def _compare(value: float, op: str, bound: float) -> bool:
-    from ..conditions import compare
-
-    return compare(value, op, bound)
 
 
 def _show(c: Literal | Comparison) -> str:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from ..conditions import holds
-from ..constraints import EC, SEQ, Constraint
+from ..constraints import Constraint
 from ..errors import NoDecompositionError, Problem
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
@@ -19,11 +19,13 @@ from ..io.hddl import Domain
 from ..taskgraph import ATASK, OP, OR, TaskGraph, Vertex
 from ..world import InitialState
 from .semantics import (
+    ConstraintIndex,
     Effects,
     State,
     achieve_test,
     effects_of,
     ground_preconditions_hold,
+    initial_state,
     robot_preconditions,
     translate_robot_effects,
 )
@@ -46,25 +48,13 @@ class ExploratoryDecomposer:
         self.gm = gm
         self.config = config
         self.progress = progress
-        facts: dict = {}
-        for lit in initial.literals:
-            facts.setdefault((lit.predicate, lit.args), lit.positive)
-        values: dict = {}
-        for key, value in initial.functions:
-            values.setdefault(key, value)
-        self.initial = State(facts, values)
+        self.initial = initial_state(initial)
         self.vmds: list[_VMD] = [_VMD([], set())]  # one empty partial decomposition to extend
         self.failures: list[str] = []  # why partial decompositions were dropped, first first
         self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
         self.by_id = {d.content: d.index for d in tg.decompositions()}
-        self.ec_partners: dict[int, set[int]] = {}
-        self.seq_after: dict[int, set[int]] = {}
-        for c in constraints:
-            if c.kind == EC:
-                self.ec_partners.setdefault(c.first, set()).add(c.second)
-                self.ec_partners.setdefault(c.second, set()).add(c.first)
-            elif c.kind == SEQ:
-                self.seq_after.setdefault(c.first, set()).add(c.second)
+        index = ConstraintIndex.of(constraints)
+        self.ec_partners, self.seq_after = index.ec, index.seq_after
         self.robot_pre = {d.index: robot_preconditions(domain, d.decomposition) for d in tg.decompositions()}
 
     # ------------------------------------------------------------------------------------------

@@ -10,12 +10,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable, Mapping
 
-from ..conditions import AllOf, Test, translate
+from ..conditions import AllOf, Test, compare, translate
+from ..constraints import EC, SEQ, Constraint
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Comparison, Domain, Literal
 from ..query import Binding
 from ..taskgraph import Decomposition, Vertex
+from ..world import InitialState
 
 AtomKey = tuple[str, tuple[str, ...]]
 
@@ -69,10 +71,35 @@ class State:
         return self.values.get((function, args))
 
 
-def numeric_holds(value: float, op: str, bound: float) -> bool:
-    if op == "=":
-        return abs(value - bound) < 1e-9
-    return value > bound
+def initial_state(initial: InitialState) -> State:
+    """The initial world as a :class:`State` (the first entry of a repeated atom wins)."""
+    facts: dict[AtomKey, bool] = {}
+    for lit in initial.literals:
+        facts.setdefault((lit.predicate, lit.args), lit.positive)
+    values: dict[AtomKey, float] = {}
+    for key, value in initial.functions:
+        values.setdefault(key, value)
+    return State(facts, values)
+
+
+@dataclass(frozen=True)
+class ConstraintIndex:
+    """Execution-constraint partners and SEQ successors of each decomposition vertex."""
+
+    ec: dict[int, set[int]]
+    seq_after: dict[int, set[int]]
+
+    @classmethod
+    def of(cls, constraints: Iterable[Constraint]) -> "ConstraintIndex":
+        ec: dict[int, set[int]] = {}
+        seq_after: dict[int, set[int]] = {}
+        for c in constraints:
+            if c.kind == EC:
+                ec.setdefault(c.first, set()).add(c.second)
+                ec.setdefault(c.second, set()).add(c.first)
+            elif c.kind == SEQ:
+                seq_after.setdefault(c.first, set()).add(c.second)
+        return cls(ec, seq_after)
 
 
 def ground_preconditions_hold(dec: Decomposition, state: State) -> bool:
@@ -86,7 +113,7 @@ def ground_preconditions_hold(dec: Decomposition, state: State) -> bool:
                 return False
         else:
             known_v = state.values.get((c.function, c.args))
-            if known_v is not None and not numeric_holds(known_v, c.op, c.value):
+            if known_v is not None and not compare(known_v, c.op, c.value):
                 return False
     return True
 
