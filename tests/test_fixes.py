@@ -2,11 +2,9 @@
 of the bundled item-delivery mission, checked with both algorithms."""
 from __future__ import annotations
 
-import json
 import shutil
 from pathlib import Path
 
-import pytest
 
 from mutrose_cp.cli import main
 from mutrose_cp.errors import NoDecompositionError

@@ -2,7 +2,6 @@
 the value of the numeric function that guards the recursion (semantics §7.6)."""
 from __future__ import annotations
 
-import json
 import shutil
 
 from conftest import require_reference

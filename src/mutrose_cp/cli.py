@@ -17,7 +17,7 @@ from typing import Sequence
 
 from . import __version__
 from .errors import MissionError, NoDecompositionError
-from .mission import Mission, find_mission_files, resolve_config_path
+from .mission import Mission, find_mission_files
 
 
 def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:

@@ -12,7 +12,7 @@ original does; nested operators of one annotation belong to the same goal and sh
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Mapping
+from typing import Callable
 
 from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
 from .errors import MissionError

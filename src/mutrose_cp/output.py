@@ -16,10 +16,10 @@ from dataclasses import dataclass
 from pathlib import Path as FsPath
 from typing import IO, Any, Iterable, Iterator, Mapping
 
-from .constraints import EC, FB, SEQ, Constraint
+from .constraints import EC, SEQ, Constraint
 from .errors import MissionError
 from .io.config import Configuration
-from .io.hddl import Comparison, Domain, Literal
+from .io.hddl import Domain, Literal
 from .taskgraph import Decomposition, TaskGraph
 from .world import InitialState
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterable, Mapping
 
-from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
+from .annotation_tree import GOAL, OPERATOR, TASK, RatNode
 from .constraints import EC, FB, SEQ
 from .errors import MissionError, NoDecompositionError
 from .taskgraph import AND, ATASK, CD, DECOMPOSITION, GOALNODE, OP, OR

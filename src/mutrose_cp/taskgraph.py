@@ -13,7 +13,7 @@ from typing import Iterator, Mapping
 
 import networkx as nx
 
-from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
+from .annotation_tree import GOAL, MEANSEND, TASK, RatNode
 from .conditions import Test, holds, translate
 from .errors import MissionError
 from .expansion import Expansion, TaskInstance

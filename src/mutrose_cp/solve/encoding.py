@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Iterable, Sequence
 
-from ..conditions import AllOf, AnyOf, FactTest, Test, ValueTest, compare
+from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel

@@ -16,12 +16,11 @@ from ..errors import NoDecompositionError, Problem
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Domain
-from ..taskgraph import ATASK, OP, OR, TaskGraph, Vertex
+from ..taskgraph import ATASK, OP, TaskGraph, Vertex
 from ..world import InitialState
 from .semantics import (
     ConstraintIndex,
     Effects,
-    State,
     achieve_test,
     effects_of,
     ground_preconditions_hold,

@@ -8,13 +8,13 @@ achieve condition requires.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Mapping
+from typing import Iterable
 
 from ..conditions import AllOf, Test, compare, translate
 from ..constraints import EC, SEQ, Constraint
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
-from ..io.hddl import Comparison, Domain, Literal
+from ..io.hddl import Domain, Literal
 from ..query import Binding
 from ..taskgraph import Decomposition, Vertex
 from ..world import InitialState
