@@ -60,7 +60,7 @@ SCALE = 10 if NIGHTLY else 1
 _HEALTH = [HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much]
 PARSER_SETTINGS = settings(max_examples=150 * SCALE, deadline=None, suppress_health_check=_HEALTH)
 EXPRESSION_SETTINGS = settings(max_examples=200 * SCALE, deadline=None, suppress_health_check=_HEALTH)
-END_TO_END_SETTINGS = settings(max_examples=12 * SCALE, deadline=None, suppress_health_check=_HEALTH)
+END_TO_END_SETTINGS = settings(max_examples=25 * SCALE, deadline=None, suppress_health_check=_HEALTH)
 
 
 def _example_files(pattern: str) -> list[tuple[str, str]]:

@@ -21,7 +21,7 @@ from lxml import etree
 from ..errors import MissionError, Problem, located
 
 # ---------------------------------------------------------------------------------------------
-# Problems shared by the readers (configuration, goal model, expressions, knowledge)
+# Problems shared by the readers (configuration, goal model, knowledge)
 
 
 @dataclass(frozen=True)
@@ -167,7 +167,7 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Elem
     if errors or root is None:
         if not errors:
             raise MissionError(Problem(source, f"XML syntax error in {what}: the document has no root element"))
-        # libxml2 reports one mistake as several messages at the same position: one problem each
+        # libxml2 reports one mistake as several messages at one position: one problem per position
         by_position: dict[tuple[int, int], list[str]] = {}
         for e in errors:
             messages = by_position.setdefault((e.line, e.column), [])

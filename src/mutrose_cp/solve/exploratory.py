@@ -61,6 +61,8 @@ class ExploratoryDecomposer:
         """All valid mission decompositions, each as decomposition vertices in mission order."""
         if self.tg.unique_branch:
             return self._unique_branch()
+        if not self.tg.tasks():
+            return []  # every task was removed (false contexts): nothing to decompose
         # every vertex of the trimmed Task Graph that is a task or an operator: trimming keeps
         # only operators with two or more children (or an achieve condition), but an operator
         # whose children were goal leaves (queries) can be left with fewer; it still scopes
