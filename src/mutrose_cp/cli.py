@@ -142,9 +142,12 @@ def _decompositions(args: argparse.Namespace, mission: Mission, progress) -> tup
     space = mission.decomposition_space(progress)
     total = space.count
     if total == 0:
-        reasons = explain(mission.encoding(explain=True)) if args.explain else []
-        detail = ("; ".join(reasons)) if reasons else "run with --explain to see the conflicting constraints"
-        raise NoDecompositionError(f"no valid mission decomposition: {detail}", str(mission.goal_model.source))
+        # a conflicting set of constraints, from CP-SAT assumptions, names what is responsible
+        reasons = explain(mission.encoding(explain=True))
+        shown = reasons if args.explain else reasons[:3]
+        detail = "; ".join(shown) or "the goal model's structure admits no combination"
+        more = "" if args.explain or len(reasons) <= 3 else f" (and {len(reasons) - 3} more: --explain lists all)"
+        raise NoDecompositionError(f"no valid mission decomposition: {detail}{more}", str(mission.goal_model.source))
     key = {d.index: f"t{i}" for i, d in enumerate(mission.task_graph.decompositions())}
     section = {"count": str(total), "components": space.component_table(key.__getitem__)}
     if args.optimize:

@@ -13,13 +13,20 @@ from typing import Iterable
 
 @dataclass(frozen=True)
 class Problem:
-    """One located problem in the mission inputs."""
+    """One located problem in the mission inputs.
+
+    ``message`` keeps the original tool's wording where there is one (users and scripts grep
+    for it); ``hint`` says how to fix the input.  The printed form shows both."""
 
     where: str
     message: str
+    hint: str = ""
 
     def __str__(self) -> str:
-        return f"{self.where}: {self.message}" if self.where else self.message
+        text = f"{self.where}: {self.message}" if self.where else self.message
+        if not self.hint:
+            return text
+        return f"{text} {self.hint}" if text.endswith((".", "!", "?")) else f"{text}. {self.hint}"
 
 
 class MissionError(Exception):

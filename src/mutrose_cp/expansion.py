@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
-from .errors import MissionError
+from .errors import MissionError, Problem
 from .io.config import Configuration
 from .io.expressions import Annotation, AnnotationLeaf, AnnotationOp
 from .io.goal_model import GMNode, GoalModel, RobotNumber
@@ -116,7 +116,11 @@ class _Walker:
         assert node.query is not None
         if not node.controls:
             raise MissionError(f"No controlled variable was declared for Query goal [{node.id}]", self._where(node))
-        records = run_select(node.query, self.world, self.bindings, node.id)
+        try:
+            records = run_select(node.query, self.world, self.bindings, node.id)
+        except MissionError as err:  # locate world-dependent query problems in the goal model
+            raise MissionError([Problem(self._where(node), p.message) if p.where in ("", node.id) else p
+                                for p in err.problems]) from None
         var = node.controls[0]
         ids = tuple(record_id(r, self.world.unique_id) for r in records)
         if var.is_collection:

@@ -24,26 +24,9 @@ from ..errors import MissionError, Problem, located
 # Problems shared by the readers (configuration, goal model, knowledge)
 
 
-@dataclass(frozen=True)
-class HintedProblem(Problem):
-    """A problem with advice on how to fix it.
-
-    ``message`` keeps the original tool's wording (users and scripts grep for it) and ``hint``
-    says how to fix the input; the printed form shows both:
-    ``where: message. Hint.``  (Shared by the readers; it belongs next to :class:`Problem`.)"""
-
-    hint: str = ""
-
-    def __str__(self) -> str:
-        text = super().__str__()
-        if not self.hint:
-            return text
-        return f"{text} {self.hint}" if text.endswith((".", "!", "?")) else f"{text}. {self.hint}"
-
-
 def hinted(where: str, message: str, hint: str = "") -> Problem:
     """A :class:`Problem`, with ``hint`` when there is one."""
-    return HintedProblem(where, message, hint) if hint else Problem(where, message)
+    return Problem(where, message, hint)
 
 
 def json_syntax_problem(err: json.JSONDecodeError, text: str, source: str) -> Problem:
@@ -52,7 +35,7 @@ def json_syntax_problem(err: json.JSONDecodeError, text: str, source: str) -> Pr
     rest = text[err.pos:]
     truncated = not rest.strip() or (err.msg.startswith("Unterminated string") and '"' not in rest[1:])
     if truncated:
-        return HintedProblem(
+        return Problem(
             where,
             f"invalid JSON: {err.msg}",
             "The text ends before the JSON document is complete: the file looks truncated; "
@@ -87,7 +70,7 @@ def json_depth_problem(text: str, source: str) -> Problem:
             line, column = line + 1, 1
         else:
             column += 1
-    return HintedProblem(
+    return Problem(
         located(source, *at),
         f"invalid JSON: arrays and objects are nested {deepest} levels deep, too deep to be read",
         "No mission file nests like this: the file is probably damaged.",
@@ -158,7 +141,7 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Elem
     if root is not None:
         info = root.getroottree().docinfo
         if info.internalDTD is not None or info.doctype:
-            raise MissionError(HintedProblem(
+            raise MissionError(Problem(
                 located(source, _line_of(data, b"<!DOCTYPE")),
                 f"DTD and entity declarations are not allowed in {what}",
                 _DTD_HINT,
@@ -375,7 +358,7 @@ def load_knowledge(
     else:
         root = next(doc_root.iterdescendants(tag=xml_root), None) if xml_root else None
     if root is None:
-        raise MissionError(HintedProblem(
+        raise MissionError(Problem(
             located(source, doc_root.sourceline),
             f"Root element [{xml_root}] (world_db.xml_root) was not found in world knowledge",
             f"Set world_db.xml_root in the configuration to the tag of the element that holds the "
