@@ -329,6 +329,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Python's cyclic collector then rescans them over and over, which cost up to 3x the
     # run time on large missions.  A command is a short-lived process: collect only at the end.
     gc.disable()
+    # exact counts are big integers (3^10000 has 4772 digits, over Python's default limit for
+    # converting an int to text)
+    sys.set_int_max_str_digits(0)
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "command", None):
