@@ -18,6 +18,7 @@ from typing import Sequence
 from . import __version__
 from .errors import MissionError, NoDecompositionError
 from .mission import Mission, find_mission_files
+from .output import SplitListing
 
 
 def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
@@ -160,7 +161,12 @@ def _decompositions(args: argparse.Namespace, mission: Mission, progress) -> tup
         return space.sample(args.sample, args.seed), total, section, f", {args.sample} sampled (seed {args.seed})"
     limit = None if args.limit == 0 else args.limit
     listed = min(total, limit) if limit is not None else total
-    return itertools.islice(iter(space), limit), total, section, (f", first {listed} listed" if listed < total else "")
+    note = f", first {listed} listed" if listed < total else ""
+    split = space.split_listing(limit)
+    if split is not None:
+        prefix, parts = split
+        return SplitListing(prefix, itertools.islice(parts, limit)), total, section, note
+    return itertools.islice(iter(space), limit), total, section, note
 
 
 def cmd_decompose(args: argparse.Namespace) -> int:

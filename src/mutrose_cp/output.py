@@ -209,6 +209,20 @@ def _value(v: str | tuple[str, ...]) -> str:
 
 
 @dataclass
+class SplitListing:
+    """Mission decompositions that share a long common part (see
+    ``DecompositionSpace.split_listing``): each is ``prefix + part``.  The writer renders the
+    common part once, which makes listing the first 1000 of 3^5000 decompositions cheap."""
+
+    prefix: list[int]
+    parts: Iterable[list[int]]
+
+    def __iter__(self) -> Iterator[list[int]]:
+        for part in self.parts:
+            yield self.prefix + part
+
+
+@dataclass
 class OutputModel:
     """Everything the writers need, with keys already assigned."""
 
@@ -304,13 +318,17 @@ class OutputBuilder:
         fh.write(",\n    \"mission_decompositions\": ")
         first = True
         quoted = {i: f'            "{k}"' for i, k in self.key.items()}  # keys need no escaping
-        for md in self.m.decompositions:
+        decompositions = self.m.decompositions
+        if isinstance(decompositions, SplitListing):
+            head = ",\n".join(quoted[i] for i in decompositions.prefix)
+            texts = (head + (",\n" if head and part else "") + ",\n".join(quoted[i] for i in part)
+                     for part in decompositions.parts)
+        else:
+            texts = (",\n".join(quoted[i] for i in md) for md in decompositions)
+        for text in texts:
             fh.write("[\n" if first else ",\n")
             first = False
-            if md:
-                fh.write("        [\n" + ",\n".join(quoted[i] for i in md) + "\n        ]")
-            else:
-                fh.write('        ""')
+            fh.write("        [\n" + text + "\n        ]" if text else '        ""')
         fh.write('""' if first else "\n    ]")
         if self.m.space is not None:
             fh.write(",\n    \"mission_decomposition_space\": ")

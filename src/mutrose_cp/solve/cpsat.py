@@ -252,23 +252,57 @@ class DecompositionSpace:
 
     def __iter__(self) -> Iterator[list[int]]:
         """All decompositions, in mixed-radix order over the components (last varies fastest)."""
-        comps = self.components
-        if not self.encoding.tasks or any(c.count == 0 for c in comps):
+        if not self.encoding.tasks or any(c.count == 0 for c in self.components):
             return
-        if any(c.solutions is None for c in comps):
+        for suffix in self._odometer(self._choices(), 0):
+            yield sorted(itertools.chain(self.fixed, suffix))
+
+    def _choices(self) -> list[list[tuple[int, ...]]]:
+        """Each component's solutions as sorted decomposition vertices."""
+        if any(c.solutions is None for c in self.components):
             raise MissionError(f"a part of the mission has more than {ENUMERATION_CAP} alternative "
                                "decompositions on its own: they can be counted (count) but not listed")
-        # each component's solutions as decomposition vertices, once; a listed decomposition is
-        # then the sorted concatenation of one choice per component
-        choices = [[tuple(self.var_to_dec[v] for v in sol) for sol in c.solutions] for c in comps]  # type: ignore[union-attr]
-        fixed = tuple(self.fixed)
+        return [[tuple(sorted(self.var_to_dec[v] for v in sol)) for sol in c.solutions]  # type: ignore[union-attr]
+                for c in self.components]
+
+    def split_listing(self, limit: int | None) -> tuple[list[int], Iterator[list[int]]] | None:
+        """The first ``limit`` decompositions (all if None) as one part common to all of them and
+        an iterator over the parts that vary, in the order of :meth:`__iter__`.
+
+        Listing is mixed-radix with the last component varying fastest, so the first ``limit``
+        decompositions differ only in the last few components; when the components occupy
+        consecutive vertex ranges, the common part can be written once.  None when they do not."""
+        if not self.encoding.tasks or any(c.count == 0 for c in self.components) or self.fixed:
+            return None
+        choices = self._choices()
+        bounds = [(min(min(s) for s in ch if s), max(max(s) for s in ch if s)) if any(ch) else None for ch in choices]
+        last = -1
+        for b in bounds:
+            if b is None:
+                continue
+            if b[0] <= last:
+                return None
+            last = b[1]
+        varying, product = 0, 1
+        for c in reversed(self.components):
+            if limit is not None and product >= limit:
+                break
+            varying += 1
+            product *= c.count
+        fixed_part = len(choices) - varying
+        prefix = [d for ch in choices[:fixed_part] for d in ch[0]]
+        return prefix, self._odometer(choices, fixed_part)
+
+    def _odometer(self, choices: list[list[tuple[int, ...]]], start: int) -> Iterator[list[int]]:
+        """Concatenations of one choice per component from ``start`` on, last varying fastest."""
+        comps = choices[start:]
         idx = [0] * len(comps)
         while True:
-            yield sorted(itertools.chain(fixed, *(ch[i] for ch, i in zip(choices, idx))))
+            yield [d for ch, i in zip(comps, idx) for d in ch[i]]
             k = len(comps) - 1
             while k >= 0:
                 idx[k] += 1
-                if idx[k] < comps[k].count:
+                if idx[k] < len(comps[k]):
                     break
                 idx[k] = 0
                 k -= 1
