@@ -50,10 +50,12 @@ class TaskInstance:
 
     @property
     def binding(self) -> dict[str, Value]:
-        """HDDL parameter -> value (the first entry wins)."""
+        """HDDL parameter -> value (the first entry wins).  A single-valued query that matched
+        nothing leaves its variable empty (""); such a parameter stays unbound."""
         out: dict[str, Value] = {}
         for p in self.parameters:
-            out.setdefault(p.hddl_param, p.value)
+            if p.value != "":
+                out.setdefault(p.hddl_param, p.value)
         return out
 
 
