@@ -53,7 +53,7 @@ def fmt_time(row: dict | None) -> str:
     if row is None:
         return "—"
     if row["status"] == "timeout":
-        return f"> {row['seconds']:.0f} s (limit)"
+        return f"> {row.get('seconds', 0):.0f} s (limit)"
     if row["status"] != "ok":
         return row["status"]
     return f"{row['seconds']:.2f} s / {row['peak_mb']:.0f} MB"

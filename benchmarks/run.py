@@ -143,6 +143,7 @@ def run_dissertation(family: str, repeats: int, timeout: float, log, quick: bool
     src = REFERENCE / folder
     hddl = next((src / "hddl").glob("*.hddl"))
     rows = []
+    stopped: set[str] = set()
     for i, n in enumerate(sizes):
         if quick and n > 3:
             break
@@ -150,10 +151,18 @@ def run_dissertation(family: str, repeats: int, timeout: float, log, quick: bool
         if not cfg.exists():
             continue
         for label, extra in (("exploratory", ["--algorithm", "exploratory"]), ("cpsat", [])):
+            if label in stopped:
+                continue
             with tempfile.TemporaryDirectory() as tmp:
                 cmd = [sys.executable, "-m", "mutrose_cp", "decompose", str(hddl), str(src / "gm" / gm_name),
                        str(cfg), "-q", "--json-summary", "-o", str(Path(tmp) / "out.json"), *extra]
-                samples = [measure(cmd, src, timeout) for _ in range(repeats)]
+                samples = []
+                for _ in range(repeats):
+                    samples.append(measure(cmd, src, timeout))
+                    if samples[-1]["status"] != "ok":
+                        break
+            if samples[-1]["status"] == "timeout":
+                stopped.add(label)
             ok = [s for s in samples if s["status"] == "ok"]
             row = {"family": f"dissertation-{family}", "n": n, "algorithm": label, "runs": len(samples),
                    "status": "ok" if len(ok) == len(samples) else samples[-1]["status"]}
