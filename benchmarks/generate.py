@@ -32,11 +32,13 @@ FAMILIES = {
 }
 
 
-def delivery_world(n: int) -> str:
+def food_world(n: int, request: str, location_field: str) -> str:
+    """n requests (``Delivery`` or ``Pickup``), each for its own patient at its own location,
+    every patient able to fetch and to open the door."""
     parts = ["<world_db>"]
     for i in range(1, n + 1):
-        parts.append(f"<Delivery><name>Delivery{i}</name><patient>Patient{i}</patient>"
-                     f"<delivery_location>Location{i}</delivery_location></Delivery>")
+        parts.append(f"<{request}><name>{request}{i}</name><patient>Patient{i}</patient>"
+                     f"<{location_field}>Location{i}</{location_field}></{request}>")
     for i in range(1, n + 1):
         parts.append(f"<Location><name>Location{i}</name><patient>Patient{i}</patient></Location>")
     parts.append("<Location><name>Kitchen</name><patient></patient></Location>")
@@ -44,20 +46,14 @@ def delivery_world(n: int) -> str:
         parts.append(f"<Patient><name>Patient{i}</name><can_fetch>true</can_fetch><can_open>true</can_open></Patient>")
     parts.append("</world_db>")
     return "\n".join(parts) + "\n"
+
+
+def delivery_world(n: int) -> str:
+    return food_world(n, "Delivery", "delivery_location")
 
 
 def pickup_world(n: int) -> str:
-    parts = ["<world_db>"]
-    for i in range(1, n + 1):
-        parts.append(f"<Pickup><name>Pickup{i}</name><patient>Patient{i}</patient>"
-                     f"<pickup_location>Location{i}</pickup_location></Pickup>")
-    for i in range(1, n + 1):
-        parts.append(f"<Location><name>Location{i}</name><patient>Patient{i}</patient></Location>")
-    parts.append("<Location><name>Kitchen</name><patient></patient></Location>")
-    for i in range(1, n + 1):
-        parts.append(f"<Patient><name>Patient{i}</name><can_fetch>true</can_fetch><can_open>true</can_open></Patient>")
-    parts.append("</world_db>")
-    return "\n".join(parts) + "\n"
+    return food_world(n, "Pickup", "pickup_location")
 
 
 def vital_signs_world(n: int) -> str:
