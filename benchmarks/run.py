@@ -171,6 +171,8 @@ def run_dissertation(family: str, repeats: int, timeout: float, log, quick: bool
                            peak_mb=statistics.median(s["peak_mb"] for s in ok),
                            task_instances=ok[0].get("task_instances"),
                            mission_decompositions=_digits(ok[0].get("mission_decompositions")))
+            else:
+                row.update(seconds=samples[-1]["seconds"], peak_mb=samples[-1]["peak_mb"])
             rows.append(row)
             log(f"{row['family']:24} n={n:<6} {label:12} {row['status']:8} {row.get('seconds', 0):8.2f} s "
                 f"tasks={row.get('task_instances')} decompositions={row.get('mission_decompositions')}")
