@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 from pathlib import Path
 
 import pytest
@@ -18,24 +17,14 @@ from mutrose_cp.io.config import (
     parse_configuration_xml,
 )
 
-_REPO = Path(__file__).resolve().parents[1]
-_REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", "../shared/reference"))
-_REFERENCE = _REFERENCE if _REFERENCE.is_absolute() else (_REPO / _REFERENCE).resolve()
+from conftest import REFERENCE as _REFERENCE
+from conftest import require_reference as reference_dir
 
 
 def _reference_root() -> Path | None:
     root = _REFERENCE
     return root if root.is_dir() else None
 
-
-def reference_dir() -> Path:
-    """The reference corpus; skipped when absent, except on CI where it must be present."""
-    root = _reference_root()
-    if root is None:
-        if os.environ.get("CI", "").lower() == "true":
-            pytest.fail("reference corpus not found (set MUTROSE_REFERENCE)")
-        pytest.skip("reference corpus not found (set MUTROSE_REFERENCE)")
-    return root
 
 
 def _reference_configs() -> list[str]:

@@ -2,7 +2,6 @@
 original's, and the value helpers follow C++ stream semantics."""
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 
@@ -20,24 +19,14 @@ from mutrose_cp.io.knowledge import (
     text_of,
 )
 
-_REPO = Path(__file__).resolve().parents[1]
-_REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", "../shared/reference"))
-_REFERENCE = _REFERENCE if _REFERENCE.is_absolute() else (_REPO / _REFERENCE).resolve()
+from conftest import REFERENCE as _REFERENCE
+from conftest import require_reference as reference_dir
 
 
 def _reference_root() -> Path | None:
     root = _REFERENCE
     return root if root.is_dir() else None
 
-
-def reference_dir() -> Path:
-    """The reference corpus; skipped when absent, except on CI where it must be present."""
-    root = _reference_root()
-    if root is None:
-        if os.environ.get("CI", "").lower() == "true":
-            pytest.fail("reference corpus not found (set MUTROSE_REFERENCE)")
-        pytest.skip("reference corpus not found (set MUTROSE_REFERENCE)")
-    return root
 
 
 def _knowledge_files() -> list[str]:

@@ -2,7 +2,6 @@
 worlds exercising each atom form and the reproduced quirks."""
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 
@@ -13,19 +12,8 @@ from mutrose_cp.io.expressions import Atom, BoolOp, Condition, Select
 from mutrose_cp.io.knowledge import WorldKnowledge, load_knowledge
 from mutrose_cp.query import Binding, run_select
 
-_REPO = Path(__file__).resolve().parents[1]
-_REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", "../shared/reference"))
-_REFERENCE = _REFERENCE if _REFERENCE.is_absolute() else (_REPO / _REFERENCE).resolve()
+from conftest import require_reference as reference_dir
 
-
-def reference_dir() -> Path:
-    """The reference corpus; skipped when absent, except on CI where it must be present."""
-    root = _REFERENCE
-    if not root.is_dir():
-        if os.environ.get("CI", "").lower() == "true":
-            pytest.fail("reference corpus not found (set MUTROSE_REFERENCE)")
-        pytest.skip("reference corpus not found (set MUTROSE_REFERENCE)")
-    return root
 
 
 def _world(mission: str, name: str = "world_db.xml") -> WorldKnowledge:

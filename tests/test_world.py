@@ -3,7 +3,6 @@ missions and on small synthetic worlds."""
 from __future__ import annotations
 
 import dataclasses
-import os
 import time
 from pathlib import Path
 
@@ -15,19 +14,8 @@ from mutrose_cp.io.hddl import Domain, load_domain
 from mutrose_cp.io.knowledge import load_knowledge
 from mutrose_cp.world import GroundLiteral, InitialState, build_initial_state
 
-_REPO = Path(__file__).resolve().parents[1]
-_REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", "../shared/reference"))
-_REFERENCE = _REFERENCE if _REFERENCE.is_absolute() else (_REPO / _REFERENCE).resolve()
+from conftest import require_reference as reference_dir
 
-
-def reference_dir() -> Path:
-    """The reference corpus; skipped when absent, except on CI where it must be present."""
-    root = _REFERENCE
-    if not root.is_dir():
-        if os.environ.get("CI", "").lower() == "true":
-            pytest.fail("reference corpus not found (set MUTROSE_REFERENCE)")
-        pytest.skip("reference corpus not found (set MUTROSE_REFERENCE)")
-    return root
 
 
 def _mission_state(mission: str, config_name: str = "configuration.json", base: str = "missions") -> InitialState:
