@@ -339,7 +339,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     # converting an int to text)
     sys.set_int_max_str_digits(0)
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # usage errors (status 2), --help and --version (status 0)
+        return int(exit_.code or 0)
     if not getattr(args, "command", None):
         parser.print_help(sys.stderr)
         return 2
