@@ -6,7 +6,8 @@ peak resident memory are measured by this parent process (``os.wait4``).  Result
 ``docs/benchmarks.md`` and its plots.
 
     python benchmarks/run.py --quick          # CI smoke run, under two minutes
-    python benchmarks/run.py                  # the full ladder, median of 3 runs per size
+    python benchmarks/run.py                  # the full ladder, median of 3 runs per size, and
+                                              # docs/benchmarks.md with its plots (about 20 min)
 """
 from __future__ import annotations
 
@@ -225,6 +226,10 @@ def main(argv: list[str] | None = None) -> int:
     failed = [r for r in rows if r["status"] not in ("ok", "timeout")]
     print(f"wrote {path} ({len(rows)} measurements, {result['elapsed_s']} s); "
           f"{len(failed)} failed runs", flush=True)
+    if not args.quick:  # the full run regenerates docs/benchmarks.md and its plots
+        import report
+
+        report.main([name])
     return 1 if failed else 0
 
 
