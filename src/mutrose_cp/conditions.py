@@ -125,10 +125,3 @@ def holds(
     if isinstance(test, AllOf):
         return all(holds(p, fact, value) for p in test.parts)
     return any(holds(p, fact, value) for p in test.parts)
-
-
-def fact_tests(test: Test) -> list[FactTest | ValueTest]:
-    """The leaf tests, in order."""
-    if isinstance(test, (FactTest, ValueTest)):
-        return [test]
-    return [leaf for p in test.parts for leaf in fact_tests(p)]

@@ -16,7 +16,7 @@ from .constraints import Constraint, generate_constraints
 from .errors import MissionError
 from .expansion import Expansion, expand
 from .htn import Path as HtnPath
-from .htn import task_paths
+from .htn import all_task_paths
 from .io.config import Configuration, load_configuration
 from .io.goal_model import GoalModel, load_goal_model
 from .io.hddl import Domain, load_domain
@@ -107,7 +107,7 @@ class Mission:
         world_path = resolve_config_path(cfg.world_db.path, Path(config))
         knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id)
         mission = cls(loaded["domain"], loaded["gm"], cfg, knowledge, Path(config))
-        mission.warnings.extend(getattr(cfg, "warnings", ()))
+        mission.warnings.extend(cfg.warnings)
         mission.warnings.extend(mission.goal_model.warnings)
         mission.warnings.extend(str(p) for p in check_annotations(mission.goal_model))
         cross = cross_check(mission.domain, mission.goal_model, cfg)
@@ -134,7 +134,7 @@ class Mission:
     @cached_property
     def paths(self) -> dict[str, list[HtnPath]]:
         """Decomposition paths of every abstract task of the domain (used or not)."""
-        return {t.name: task_paths(self.domain, t.name) for t in self.domain.tasks}
+        return all_task_paths(self.domain)
 
     @cached_property
     def task_graph(self) -> TaskGraph:

@@ -7,7 +7,6 @@ never leaves a half-written output.
 """
 from __future__ import annotations
 
-import io
 import os
 import re
 import tempfile
@@ -289,16 +288,6 @@ class OutputBuilder:
             return head + f',\n            "group": "{c.group}",\n            "divisible": "{c.divisible}"\n        }}'
         return head + "\n        }"
 
-    def constraint_entry(self, c: Constraint) -> dict[str, Tree]:
-        entry: dict[str, Tree] = {
-            "type": "SEQ" if c.kind == SEQ else "EC",
-            "task_instances": {"t0": self.key[c.first], "t1": self.key[c.second]},
-        }
-        if c.kind == EC:
-            entry["group"] = str(c.group)
-            entry["divisible"] = str(c.divisible)
-        return entry
-
     def write_json(self, fh: IO[str]) -> None:
         """Stream the JSON document (mission decompositions may be many)."""
         fh.write("{\n    \"actions\": ")
@@ -482,9 +471,3 @@ def write_output(model: OutputModel, path: str | os.PathLike, file_type: str) ->
             builder.write_xml(fh)
         else:
             builder.write_json(fh)
-
-
-def render_json(model: OutputModel) -> str:
-    buf = io.StringIO()
-    OutputBuilder(model).write_json(buf)
-    return buf.getvalue()
