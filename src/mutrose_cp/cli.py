@@ -333,8 +333,17 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     # The pipeline allocates millions of small acyclic objects (vertices, edges, literals);
     # Python's cyclic collector then rescans them over and over, which cost up to 3x the
-    # run time on large missions.  A command is a short-lived process: collect only at the end.
+    # run time on large missions.  A command is short-lived: the collector is paused meanwhile.
+    collecting = gc.isenabled()
     gc.disable()
+    try:
+        return _main(argv)
+    finally:
+        if collecting:
+            gc.enable()
+
+
+def _main(argv: Sequence[str] | None) -> int:
     # exact counts are big integers (3^10000 has 4772 digits, over Python's default limit for
     # converting an int to text)
     sys.set_int_max_str_digits(0)
