@@ -54,29 +54,20 @@ def atomic_writer(path: str | os.PathLike, mode: str = "w") -> Iterator[IO]:
 _PLAIN = re.compile(r'[ !#-.0-\[\]-~]*')  # printable ASCII except " / \\
 
 
+_ESCAPES = {'"': '\\"', "\\": "\\\\", "/": "\\/", "\b": "\\b", "\f": "\\f", "\n": "\\n", "\r": "\\r",
+            "\t": "\\t"}
+
+
 def _escape(s: str) -> str:
+    """Boost's JSON string escaping: named escapes, then every other byte outside printable
+    ASCII as ``\\u00XX`` (per UTF-8 byte, as Boost does)."""
     if _PLAIN.fullmatch(s):
         return '"' + s + '"'
     out = []
     for ch in s:
-        o = ord(ch)
-        if ch == '"':
-            out.append('\\"')
-        elif ch == "\\":
-            out.append("\\\\")
-        elif ch == "/":
-            out.append("\\/")
-        elif ch == "\b":
-            out.append("\\b")
-        elif ch == "\f":
-            out.append("\\f")
-        elif ch == "\n":
-            out.append("\\n")
-        elif ch == "\r":
-            out.append("\\r")
-        elif ch == "\t":
-            out.append("\\t")
-        elif o < 0x20 or o > 0x7E:
+        if ch in _ESCAPES:
+            out.append(_ESCAPES[ch])
+        elif ord(ch) < 0x20 or ord(ch) > 0x7E:
             out.extend(f"\\u00{b:02X}" for b in ch.encode("utf-8"))
         else:
             out.append(ch)

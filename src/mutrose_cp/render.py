@@ -193,6 +193,18 @@ def _robots(inst: "TaskInstance") -> str | None:
     return f"robots: {r.min}..{r.max}"
 
 
+def _task_lines(instance_id: str, inst: "TaskInstance | None") -> list[str]:
+    """Label lines of a task instance: id and task, location, robot number."""
+    lines = [f"{instance_id}: {inst.name}" if inst else instance_id]
+    if inst is not None:
+        if inst.location is not None:
+            lines.append(f"at {_value(inst.location)}")
+        robots = _robots(inst)
+        if robots:
+            lines.append(robots)
+    return lines
+
+
 def _goal_lines(node: "GMNode", var_maps: Mapping[str, object], forall_hub: bool = False) -> list[str]:
     """Label lines of a goal: its text and what the decomposer reads from its properties."""
     lines = _wrap(_goal_title(node))
@@ -278,14 +290,7 @@ def goal_model_dot(mission: "Mission", rankdir: str = "LR") -> str:
 
     def visit(node: RatNode, parent: str | None, alternative: bool, suffix: str) -> None:
         if node.kind == TASK:
-            inst = instances.get(node.content)
-            lines = [node.content + (f": {inst.name}" if inst else "")]
-            if inst is not None:
-                if inst.location is not None:
-                    lines.append(f"at {_value(inst.location)}")
-                robots = _robots(inst)
-                if robots:
-                    lines.append(robots)
+            lines = _task_lines(node.content, instances.get(node.content))
             node_id = dot.unique(node.content)
             if kept is not None and node.content not in kept:
                 # a false condition context that nothing enables removed this branch
@@ -403,15 +408,7 @@ def task_graph_dot(mission: "Mission", rankdir: str = "LR") -> str:
                 lines.append(_constraining_flag(v.group, v.divisible))
             dot.node(nid, shape="box", label=_label(lines), **_filled(GOAL_COLOURS, "rounded,filled"))
         elif v.kind == ATASK:
-            inst = v.instance
-            lines = [f"{v.content}: {inst.name}" if inst else v.content]
-            if inst is not None:
-                if inst.location is not None:
-                    lines.append(f"at {_value(inst.location)}")
-                robots = _robots(inst)
-                if robots:
-                    lines.append(robots)
-            dot.node(nid, shape="box", label=_label(lines), **_filled(TASK_COLOURS))
+            dot.node(nid, shape="box", label=_label(_task_lines(v.content, v.instance)), **_filled(TASK_COLOURS))
         else:
             dec = v.decomposition
             lines = [f"{keys.get(v.index, '')}  {v.content}".strip()]

@@ -267,6 +267,18 @@ class _Builder:
         self.problem(full, f"expected a value, found {'a list' if isinstance(value, list) else 'an object'}")
         return None
 
+    def choice(self, obj: dict[str, Any], key: str, path: str, missing: str, allowed: tuple[str, ...],
+               unsupported: str, hint: str) -> str | None:
+        """A required key whose lower-cased value must be one of ``allowed``; ``unsupported``
+        is formatted with the value as written.  None (problem reported) otherwise."""
+        value = self.scalar(obj, key, path, missing)
+        if value is None:
+            return None
+        if value.lower() not in allowed:
+            self.problem(f"{path}.{key}", unsupported.format(value), hint)
+            return None
+        return value.lower()
+
     def obj(self, value: Any, path: str) -> dict[str, Any] | None:
         if isinstance(value, dict):
             return value
@@ -324,21 +336,11 @@ class _Builder:
         wd = self.obj(data["world_db"], "world_db")
         if wd is None:
             return None
-        ok = True
-        db_type = self.scalar(wd, "type", "world_db", "Database type for [world_db] was not defined")
-        if db_type is None:
-            ok = False
-        elif db_type.lower() != "file":
-            self.problem("world_db.type", f"Database type [{db_type}] is not supported",
-                         "The only supported database type is file.")
-            ok = False
-        file_type = self.scalar(wd, "file_type", "world_db", "Database file type for [world_db] was not defined")
-        if file_type is None:
-            ok = False
-        elif file_type.lower() != "xml":
-            self.problem("world_db.file_type", f"Database file type [{file_type}] is not supported",
-                         "The only supported database file type is xml.")
-            ok = False
+        db_type = self.choice(wd, "type", "world_db", "Database type for [world_db] was not defined", ("file",),
+                              "Database type [{}] is not supported", "The only supported database type is file.")
+        file_type = self.choice(wd, "file_type", "world_db", "Database file type for [world_db] was not defined",
+                                ("xml",), "Database file type [{}] is not supported",
+                                "The only supported database file type is xml.")
         path = self.scalar(wd, "path", "world_db", "Missing attributes [path] in world_db definition")
         xml_root = self.scalar(wd, "xml_root", "world_db")
         if not xml_root:
@@ -349,9 +351,9 @@ class _Builder:
             )
             xml_root = None
         unique_id = self.scalar(wd, "unique_id", "world_db") or "name"
-        if not ok or path is None:
+        if db_type is None or file_type is None or path is None:
             return None
-        return WorldDbConfig(db_type.lower(), file_type.lower(), path, xml_root, unique_id)  # type: ignore[union-attr]
+        return WorldDbConfig(db_type, file_type, path, xml_root, unique_id)
 
     def output(self, data: dict[str, Any]) -> OutputConfig | None:
         if "output" not in data:
@@ -360,25 +362,15 @@ class _Builder:
         out = self.obj(data["output"], "output")
         if out is None:
             return None
-        ok = True
-        output_type = self.scalar(out, "output_type", "output", "missing key output.output_type")
-        if output_type is None:
-            ok = False
-        elif output_type.lower() != "file":
-            self.problem("output.output_type", f"Output type [{output_type}] is not supported",
-                         "The only supported output type is file (the output is written to output.file_path).")
-            ok = False
-        file_type = self.scalar(out, "file_type", "output", "missing key output.file_type")
-        if file_type is None:
-            ok = False
-        elif file_type.lower() not in ("json", "xml"):
-            self.problem("output.file_type", f"File type [{file_type}] is not supported",
-                         "Use json or xml.")
-            ok = False
+        output_type = self.choice(out, "output_type", "output", "missing key output.output_type", ("file",),
+                                  "Output type [{}] is not supported",
+                                  "The only supported output type is file (the output is written to output.file_path).")
+        file_type = self.choice(out, "file_type", "output", "missing key output.file_type", ("json", "xml"),
+                                "File type [{}] is not supported", "Use json or xml.")
         file_path = self.scalar(out, "file_path", "output", "missing key output.file_path")
-        if not ok or file_path is None:
+        if output_type is None or file_type is None or file_path is None:
             return None
-        return OutputConfig(output_type.lower(), file_type.lower(), file_path)  # type: ignore[union-attr]
+        return OutputConfig(output_type, file_type, file_path)
 
     def type_mapping(self, value: Any) -> tuple[tuple[str, str], ...]:
         out: list[tuple[str, str]] = []
