@@ -378,13 +378,14 @@ class _PathGenerator:
         return out
 
     def _check(self, step: Step, state: _State, later: list[Step]):
-        """Check a primitive step's preconditions against ``state`` with the original's quirks.
+        """Check a primitive step's preconditions against ``state``.
 
-        Returns ``(executable, (facts, values) to assume, assumed ">" guards)``.  A numeric
-        comparison with a known value *overwrites* the executable flag (the original's bug, which
-        the reference outputs depend on); the ``not`` of a comparison is ignored.  Unknown facts
-        are assumed; a ``>`` guard is assumed at ``N - sum of later decrements`` so that a
-        recursive method runs once more and then stops."""
+        Returns ``(executable, (facts, values) to assume, assumed ">" guards)``.  Every
+        precondition must hold: the original lets a later numeric comparison that holds
+        overwrite an earlier failure, which no reference output depends on (docs/deviations.md);
+        the ``not`` of a comparison is ignored, as in the original.  Unknown facts are assumed;
+        a ``>`` guard is assumed at ``N - sum of later decrements`` so that a recursive method
+        runs once more and then stops."""
         executable = True
         facts: list = []
         values: list = []
@@ -395,12 +396,14 @@ class _PathGenerator:
                 if key in state.facts:
                     if state.facts[key] != c.positive:
                         executable = False
+                elif (key, not c.positive) in facts:
+                    executable = False  # the step requires a fact and its negation: never executable
                 else:
                     facts.append((key, c.positive))
             else:
                 key = (c.function, c.args)
                 if key in state.values:
-                    executable = compare(state.values[key], c.op, c.value)
+                    executable = executable and compare(state.values[key], c.op, c.value)
                 elif c.op == ">":
                     delta = sum(
                         (n.amount if n.kind == "increase" else -n.amount)
@@ -410,6 +413,8 @@ class _PathGenerator:
                     values.append((key, c.value - delta))
                     guards.append((key, c.value))
                 else:
+                    if any(k == key and v != c.value for k, v in values):
+                        executable = False  # two different assumed values of one function
                     values.append((key, c.value))
         return executable, (facts, values), guards
 

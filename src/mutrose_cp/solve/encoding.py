@@ -3,7 +3,7 @@
 The exploratory algorithm filters explicit lists; here the same rules become constraints over
 *choice literals*: one per OR alternative and one per (task instance, decomposition).  World
 facts are carried symbolically: the value of an atom at a point of the Task Graph is "the last
-chosen writer in id order, else the initial value", so preconditions, parallel conflicts and
+chosen writer in Task Graph order, else the initial value", so preconditions, parallel conflicts and
 achieve conditions become clauses over the writers' literals.  Facts that no decomposition
 changes are folded in as constants while the model is built.
 
@@ -27,6 +27,7 @@ from .semantics import (
     ConstraintIndex,
     Effects,
     achieve_test,
+    contradicts_itself,
     effects_of,
     ground_preconditions_hold,
     initial_state,
@@ -174,10 +175,10 @@ class Encoder:
         self.labels: dict[str, str] = {}
         self._chain_cache: dict = {}
         self._subtree: dict[int, list[int]] = {}
-        order = sorted(self.effects, key=lambda d: tg.vertices[d].content)
+        order = sorted(self.effects)  # Task Graph vertex order, the order effects are applied in
         self.bool_writers: dict[tuple, list[tuple[int, bool]]] = {}
         self.num_writers: dict[tuple, list[tuple[int, str, float]]] = {}
-        for d in order:  # writers of each atom, in decomposition-id order (the original's map order)
+        for d in order:  # writers of each atom, in the order their effects are applied (§7.3)
             for key, val in self.effects[d].facts:
                 self.bool_writers.setdefault(key, []).append((d, val))
             for key, kind, amount in self.effects[d].numeric:
@@ -268,7 +269,7 @@ class Encoder:
 
     # --- world values ------------------------------------------------------------------------------
     def _bool_value(self, atom: tuple, writers: list[tuple[int, bool]]) -> tuple[Lit, Lit]:
-        """(known, true) literals of ``atom`` after the chosen ``writers`` (sorted by id) have been
+        """(known, true) literals of ``atom`` after the chosen ``writers`` (in Task Graph order) have been
         applied to the initial state."""
         key = ("b", atom, tuple(writers))
         if key in self._chain_cache:
@@ -336,9 +337,6 @@ class Encoder:
         parts = [self._state_test(p, decs, name) for p in test.parts]
         return self.m.and_of(parts, name) if isinstance(test, AllOf) else self.m.or_of(parts, name)
 
-    def _sorted(self, decs: Iterable[int]) -> list[int]:
-        return sorted(decs, key=lambda d: self.tg.vertices[d].content)
-
     def _bool_writers(self, atom: tuple, decs: set[int]) -> list[tuple[int, bool]]:
         return [w for w in self.bool_writers.get(atom, ()) if w[0] in decs]
 
@@ -366,6 +364,8 @@ class Encoder:
         for dv in tg.decompositions_of(t):
             d = dv.index
             dec = dv.decomposition
+            if contradicts_itself(dec):
+                self.m.clause([neg(self.x[d])], self._label(f"pre:{dec.id}", f"{dec.id}: its preconditions contradict each other"))
             for c in dec.predicates.preconditions:
                 if any(a.startswith("?") for a in c.args):
                     continue
@@ -387,7 +387,7 @@ class Encoder:
             return
         tg = self.tg
         dec = tg.vertices[d].decomposition
-        partners = [e for e in self._sorted(self.ec.get(d, ()))
+        partners = [e for e in sorted(self.ec.get(d, ()))
                     if self.queue_pos[tg.vertices[e].parent] < self.queue_pos[t]
                     and e not in self.seq_after.get(d, set())]
         for lit in pre:

@@ -93,6 +93,12 @@ class ExploratoryDecomposer:
                     out.append([d.index])
         return out
 
+    def _in_graph_order(self, ids: set[str]) -> list[str]:
+        """Decomposition ids in Task Graph vertex order: the order in which the original applies
+        effects (its maps are keyed by vertex index, §7.3), which is also the order of the SEQ
+        constraints.  The order of the id strings would put ``AT10_1|1`` before ``AT2_1|1``."""
+        return sorted(ids, key=self.by_id.__getitem__)
+
     def _pop(self) -> Vertex:
         v = self.tg.vertices[self.queue[self.pos]]
         self.pos += 1
@@ -133,7 +139,7 @@ class ExploratoryDecomposer:
             kept = []
             for m in self.vmds:
                 state = self.initial.copy()
-                for key in sorted(m.ids):
+                for key in self._in_graph_order(m.ids):
                     if key in E:
                         state.apply(E[key])
                 if holds(test, state.fact, state.value):
@@ -149,7 +155,7 @@ class ExploratoryDecomposer:
         for m in self.vmds:
             seen: dict = {}
             ok = True
-            for key in sorted(m.ids):
+            for key in self._in_graph_order(m.ids):
                 if key not in E:
                     continue
                 for atom, val in E[key].facts:
@@ -175,7 +181,7 @@ class ExploratoryDecomposer:
         partners = self.ec_partners.get(d, set())
         state: dict = {}
         dec = self.tg.vertices[d].decomposition
-        for key in sorted(members):
+        for key in self._in_graph_order(members):
             e = self.by_id[key]
             if e == d or e not in partners or e in self.seq_after.get(d, set()):
                 continue  # only partners that may run before d can have changed the robot
@@ -194,7 +200,7 @@ class ExploratoryDecomposer:
         for m in self.vmds:
             work = set(m.ids)
             base = self.initial.copy()
-            for key in sorted(work):
+            for key in self._in_graph_order(work):
                 if key in effects_in:
                     base.apply(effects_in[key])
             for d in decs:

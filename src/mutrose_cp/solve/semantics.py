@@ -102,8 +102,27 @@ class ConstraintIndex:
         return cls(ec, seq_after)
 
 
+def contradicts_itself(dec: Decomposition) -> bool:
+    """Whether two ground boolean preconditions of ``dec`` require opposite values of one atom.
+
+    The ground preconditions that remain after grounding (§2.5) all speak of the state in which
+    the decomposition starts, so such a decomposition can never be executed, whatever the
+    world knows.  (Parameters bound to the same entity can make a method's preconditions
+    contradict only once grounded; a contradiction visible in the domain already prunes the
+    path, ``htn``.)"""
+    required: dict[AtomKey, bool] = {}
+    for c in dec.predicates.preconditions:
+        if isinstance(c, Literal) and is_ground(c.args):
+            if required.setdefault((c.predicate, c.args), c.positive) != c.positive:
+                return True
+    return False
+
+
 def ground_preconditions_hold(dec: Decomposition, state: State) -> bool:
-    """§7.4: ground boolean and numeric preconditions; unknown atoms are satisfied."""
+    """§7.4: ground boolean and numeric preconditions; unknown atoms are satisfied, but a
+    decomposition that contradicts itself never holds."""
+    if contradicts_itself(dec):
+        return False
     for c in dec.predicates.preconditions:
         if not is_ground(c.args):
             continue
