@@ -458,7 +458,7 @@ class GroundPredicates:
     """Preconditions and net effects of a decomposition of one task instance."""
 
     preconditions: tuple[Literal | Comparison, ...]  # path order, duplicates kept
-    effects: tuple[Literal, ...]  # ground net effects, then non-ground ones
+    effects: tuple[Literal, ...]  # net effects, in the order they are first declared
     numeric_effects: tuple[tuple[str, tuple[str, ...], str, int], ...]  # (fn, args, kind, amount)
 
     @property
@@ -480,8 +480,9 @@ def _groundings(args: tuple[str, ...], binding: Mapping[str, Value]) -> list[tup
 def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
     """Instantiate a path with an instance's parameter values (root parameter -> value)."""
     pre: list[Literal | Comparison] = []
-    ground_eff: dict[tuple[str, tuple[str, ...]], bool] = {}
-    free_eff: dict[tuple[str, tuple[str, ...]], bool] = {}
+    # net effects in declaration order: a later effect on an atom replaces the earlier one in
+    # its place; ground and non-ground atoms never share a key (only the latter hold "?")
+    net_eff: dict[tuple[str, tuple[str, ...]], bool] = {}
     numeric: dict[tuple[str, tuple[str, ...]], tuple[str, int]] = {}
     free_numeric: list[tuple[str, tuple[str, ...], str, int]] = []
     seen_ground: set[tuple[str, tuple[str, ...]]] = set()
@@ -508,11 +509,11 @@ def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
         for e in step.effects:
             grounds = _groundings(e.args, binding)
             if grounds is None:
-                free_eff[(e.predicate, e.args)] = e.positive
+                net_eff[(e.predicate, e.args)] = e.positive
                 seen_free.add((e.predicate, e.args))
                 continue
             for g in grounds:
-                ground_eff[(e.predicate, g)] = e.positive
+                net_eff[(e.predicate, g)] = e.positive
                 seen_ground.add((e.predicate, g))
         for n in step.numeric_effects:
             grounds = _groundings(n.args, binding)
@@ -528,8 +529,7 @@ def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
                     delta = n.amount if n.kind == "increase" else -n.amount
                     kind, old = numeric.get(key, ("increase", 0))
                     numeric[key] = (kind, old + delta)
-    effects = [Literal(p, a, v) for (p, a), v in ground_eff.items()]
-    effects += [Literal(p, a, v) for (p, a), v in free_eff.items()]
+    effects = [Literal(p, a, v) for (p, a), v in net_eff.items()]
     return GroundPredicates(
         preconditions=tuple(pre),
         effects=tuple(effects),

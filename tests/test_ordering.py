@@ -1,0 +1,108 @@
+"""Regression tests for the order in which effects are applied and for self-contradictory
+preconditions (both decomposers), on minimal missions built with the mission generator's model.
+
+Effects of the decompositions a task sees are applied in Task Graph vertex order (§7.3, the
+order of the SEQ constraints), not in the string order of their ids, where ``AT10_1|1`` comes
+before ``AT2_1|1``.
+"""
+from __future__ import annotations
+
+import json
+
+from mutrose_cp.cli import main
+from mutrose_cp.errors import NoDecompositionError
+from mutrose_cp.mission import Mission
+
+from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
+
+NOOP = Action("wait-here")
+SET_LIT = Action("switch-on", eff=(Lit("lit", "?rm"),))
+UNSET_LIT = Action("switch-off", eff=(Lit("lit", "?rm", False),))
+NEED_DARK = Action("inspect-dark", pre=(Lit("lit", "?rm", False),))
+NEED_LIGHT = Action("inspect-lit", pre=(Lit("lit", "?rm"),))
+ACTIONS = (NOOP, SET_LIT, UNSET_LIT, NEED_DARK, NEED_LIGHT)
+
+
+def _task(name: str, action: Action, pre: tuple = ()) -> Task:
+    return Task(name, (Method(f"{name.lower()}-method", pre, (action.name,)),))
+
+
+TASKS = (_task("Wait", NOOP), _task("LightOn", SET_LIT), _task("LightOff", UNSET_LIT),
+         _task("InspectDark", NEED_DARK), _task("InspectLit", NEED_LIGHT))
+
+
+def _spec(tree: GoalNode, tasks=TASKS, actions=ACTIONS, lit: bool | None = None) -> MissionSpec:
+    room = Room("Room1", True, (("lit", lit), ("sealed", None)), 0)
+    return MissionSpec(("lit", "sealed"), ("charged",), actions, tasks, (room,), True, "", tree)
+
+
+def _solve(spec: MissionSpec, tmp_path) -> tuple[Mission, list[set[str]], list[set[str]]]:
+    """Both algorithms' valid mission decompositions, as sets of decomposition ids."""
+    mission = Mission.load(*spec.write(tmp_path / "mission"))
+    ids = {d.index: d.content for d in mission.task_graph.decompositions()}
+    try:
+        exploratory = sorted(({ids[d] for d in md} for md in mission.exploratory()), key=sorted)
+    except NoDecompositionError:
+        exploratory = []
+    cpsat = sorted(({ids[d] for d in md} for md in mission.decomposition_space()), key=sorted)
+    return mission, exploratory, cpsat
+
+
+def test_effects_apply_in_task_graph_order_not_id_order(tmp_path):
+    """[AT1;...;AT11]: AT2 switches the light on, AT10 off, AT11 needs it off.  In id order
+    AT10's effect would come before AT2's and leave the light on."""
+    children = [TaskNode("Wait")] * 11
+    children[1] = TaskNode("LightOn")
+    children[9] = TaskNode("LightOff")
+    children[10] = TaskNode("InspectDark")
+    tree = GoalNode(tuple(children), annotation=("flat", ";"))
+    mission, exploratory, cpsat = _solve(_spec(tree), tmp_path)
+    expected = [{f"AT{k}_1|1" for k in range(1, 12)}]
+    assert exploratory == cpsat == expected
+    assert main(["count", str(tmp_path / "mission")]) == 0
+
+
+def test_effects_follow_the_sequence_constraints_after_trimming(tmp_path, capsys):
+    """[G4;AT2;G5] with G4 -> AT1 (light off), AT2 (light on), G5 -> AT3 (needs light).
+    Trimming puts the direct task AT2 first: the SEQ constraints say AT2, AT1, AT3, so the light
+    is off when AT3 runs and no mission decomposition is valid (as in the original)."""
+    tree = GoalNode((GoalNode((TaskNode("LightOff"),)), TaskNode("LightOn"), GoalNode((TaskNode("InspectLit"),))),
+                    annotation=("flat", ";"))
+    spec = _spec(tree)
+    mission, exploratory, cpsat = _solve(spec, tmp_path)
+    ids = {d.index: d.content for d in mission.task_graph.decompositions()}
+    seq = [(ids[c.first], ids[c.second]) for c in mission.constraints if c.kind == "SEQ"]
+    assert seq == [("AT2_1|1", "AT1_1|1"), ("AT1_1|1", "AT3_1|1")]
+    assert exploratory == cpsat == []
+    for algorithm in ("exploratory", "cpsat"):
+        assert main(["decompose", str(tmp_path / "mission"), "--algorithm", algorithm, "-q",
+                     "-o", str(tmp_path / "out.json")]) == 3
+    assert "AT3_1" in capsys.readouterr().err
+
+
+def test_a_method_that_contradicts_itself_yields_no_path(tmp_path):
+    """A method requiring (lit ?rm) and (not (lit ?rm)) can never be applied: only the other
+    method of the task gives a decomposition, in both algorithms and whatever the world says."""
+    contradictory = Method("impossible", (Lit("lit", "?rm"), Lit("lit", "?rm", False)), ("wait-here",))
+    duplicate = Method("doubled", (Lit("sealed", "?rm"), Lit("sealed", "?rm")), ("switch-on",))
+    tasks = (Task("Prepare", (contradictory, duplicate)),)
+    tree = GoalNode((TaskNode("Prepare"), TaskNode("Prepare")), annotation=("flat", ";"))
+    for lit in (None, True, False):
+        mission, exploratory, cpsat = _solve(_spec(tree, tasks=tasks, lit=lit), tmp_path / str(lit))
+        paths = mission.paths["Prepare"]
+        assert [[s.name for s in p.actions] for p in paths] == [["switch-on"]]
+        assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1"}]
+
+
+def test_effects_printed_in_declaration_order(tmp_path):
+    """A robot-related effect declared before a ground one stays first in the output (consumers
+    diff these files against the original's)."""
+    act = Action("charge-and-light", eff=(Lit("charged", "?r", False), Lit("lit", "?rm")))
+    tasks = (_task("Prepare", act),)
+    tree = GoalNode((TaskNode("Prepare"), TaskNode("Prepare")), annotation=("flat", ";"))
+    folder = tmp_path / "mission"
+    _spec(tree, tasks=tasks, actions=(act,)).write(folder)
+    out = tmp_path / "out.json"
+    assert main(["decompose", str(folder), "-q", "-o", str(out)]) == 0
+    task = json.loads(out.read_text())["tasks"]["t0"]
+    assert [e["predicate"] for e in task["effects"]] == ["not ?r.is_charged", "Room1.is_lit"]
