@@ -342,9 +342,12 @@ class _PathGenerator:
             if failed:
                 continue
             combined: list[_Partial] = []
+            if any(not lst for lst in child_lists):
+                # an abstract subtask without an executable method makes this ordering
+                # inapplicable; the original drops the subtask and keeps the rest of the method,
+                # a decomposition that skips required work (docs/deviations.md)
+                continue
             for lst in child_lists:
-                if not lst:
-                    continue  # an abstract subtask without executable method disappears (quirk)
                 if not combined:
                     combined = [_Partial(list(p.steps), list(p.trees), list(p.fragments)) for p in lst]
                     continue

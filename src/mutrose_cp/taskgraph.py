@@ -73,6 +73,9 @@ class TaskGraph:
     _ec: dict[int, list[tuple[int, bool, bool]]] = field(default_factory=dict)
     _ec_pairs: set[tuple[int, int]] = field(default_factory=set)
     _decs: dict[int, list[Vertex]] = field(default_factory=dict)
+    # achieve goals that trimming removed (means-end goals, single-child chains above the root),
+    # by the kept vertex that now stands for their subtree: their conditions are checked there
+    achieve_carried: dict[int, list[Vertex]] = field(default_factory=dict)
 
     def add(self, vertex: Vertex) -> Vertex:
         vertex.index = len(self.vertices)
@@ -408,6 +411,14 @@ def _trim(tg: TaskGraph) -> TaskGraph:
             insert_tasks(v, v)
         else:
             insert_tasks(v, kept_ancestor(v))
+    for vx in tg.vertices:
+        if vx.index in index or not vx.is_achieve_type or vx.kind not in (OP, GOALNODE):
+            continue
+        u = vx.index  # a removed achieve goal: follow its single child down to a kept vertex
+        while u not in index and len(tg.children(u)) == 1:
+            u = tg.children(u)[0]
+        if u in index:
+            new.achieve_carried.setdefault(index[u], []).append(vx)
     for a in range(len(tg.vertices)):
         if a not in index:
             continue

@@ -26,13 +26,13 @@ from ..world import InitialState
 from .semantics import (
     ConstraintIndex,
     Effects,
-    achieve_test,
+    achieve_tests,
     contradicts_itself,
     effects_of,
-    ground_preconditions_hold,
     initial_state,
     robot_preconditions,
     translate_robot_effects,
+    unique_branch_valid,
 )
 
 TRUE = "TRUE"
@@ -197,13 +197,10 @@ class Encoder:
             self._task_rules(t)
         for v in queue:
             vx = tg.vertices[v]
-            if vx.kind != OP:
-                continue
-            if vx.content == "#" and not tg.is_or(v):
+            if vx.kind == OP and vx.content == "#" and not tg.is_or(v):
                 self._conflicts(v)
-            test = achieve_test(vx, self.gm, self.config)
-            if test is not None:
-                self._achieve(v, test)
+            for goal, test in achieve_tests(tg, v, self.gm, self.config):
+                self._achieve(v, goal, test)
         return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
 
     def _unique_branch(self) -> Encoding:
@@ -216,8 +213,9 @@ class Encoder:
                 lit = self.m.new_bool(d.content)
                 self.x[d.index] = lit
                 all_x.append(lit)
-                if not self._initially_valid(d.index):
-                    self.m.clause([neg(lit)], self._label(f"pre:{d.content}", f"{d.content}: a precondition is false in the initial world state"))
+                if not unique_branch_valid(self.tg, d, self.initial, self.gm, self.config):
+                    self.m.clause([neg(lit)], self._label(f"pre:{d.content}", f"{d.content}: a precondition is false in the "
+                                                          "initial world state, or an achieve condition after it"))
         self.m.records.append(Record("sum_eq", tuple(all_x), TRUE, label="unique-branch"))
         return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
 
@@ -226,9 +224,6 @@ class Encoder:
             self.labels[key] = text
             return key
         return ""
-
-    def _initially_valid(self, d: int) -> bool:
-        return ground_preconditions_hold(self.tg.vertices[d].decomposition, self.initial)
 
     # --- choices ---------------------------------------------------------------------------------
     def _choices(self, v: int, active: Lit) -> None:
@@ -344,18 +339,19 @@ class Encoder:
         return [w for w in self.num_writers.get(atom, ()) if w[0] in decs]
 
     # --- rules -------------------------------------------------------------------------------------
-    def _preceding(self, t: int) -> set[int]:
-        """Decompositions whose effects a task sees: those of the preceding siblings' subtrees
-        when its parent is a sequence (nothing flows into nested operators, §7.3)."""
+    def _preceding(self, v: int) -> set[int]:
+        """Decompositions whose effects vertex ``v`` sees (§7.3): for every enclosing sequence,
+        those of the subtrees before the branch that holds ``v``."""
         tg = self.tg
-        p = tg.vertices[t].parent
-        if p < 0 or tg.vertices[p].content != ";":
-            return set()
         out: set[int] = set()
-        for c in tg.children(p):
-            if c == t:
-                break
-            out.update(self._subtree_decompositions(c))
+        child, p = v, tg.vertices[v].parent
+        while p >= 0:
+            if tg.vertices[p].content == ";":
+                for c in tg.children(p):
+                    if c == child:
+                        break
+                    out.update(self._subtree_decompositions(c))
+            child, p = p, tg.vertices[p].parent
         return out
 
     def _task_rules(self, t: int) -> None:
@@ -429,17 +425,16 @@ class Encoder:
                 any_neg = self.m.or_of([self.x[b] for b in negs], f"anyneg({atom})")
                 self.m.clause([neg(any_pos), neg(any_neg)], label)
 
-    def _achieve(self, v: int, test: Test) -> None:
-        """The operator's achieve condition must hold when it is active.  A conjunction is
-        posted part by part (one per forAll element), so independent instances stay in
-        independent components."""
-        vx = self.tg.vertices[v]
-        decs = set(self._subtree_decompositions(v))
+    def _achieve(self, v: int, goal: str, test: Test) -> None:
+        """An achieve condition checked at ``v`` must hold when ``v`` is active, after the
+        effects of ``v``'s subtree.  A conjunction is posted part by part (one per forAll
+        element), so independent instances stay in independent components."""
+        decs = set(self._subtree_decompositions(v)) | self._preceding(v)
         parts = list(_conjuncts(test))
         for i, part in enumerate(parts):
-            holds = self._state_test(part, decs, f"achieve({vx.achieve_goal}@{v})")
+            holds = self._state_test(part, decs, f"achieve({goal}@{v})")
             self.m.clause([neg(self.active[v]), holds],
-                          self._label(f"achieve:{v}:{i}", f"achieve condition of goal {vx.achieve_goal}: {_show_test(part)}"))
+                          self._label(f"achieve:{v}:{goal}:{i}", f"achieve condition of goal {goal}: {_show_test(part)}"))
 
 
 def _conjuncts(test: Test) -> Iterable[Test]:

@@ -21,12 +21,13 @@ from ..world import InitialState
 from .semantics import (
     ConstraintIndex,
     Effects,
-    achieve_test,
+    achieve_tests,
     effects_of,
     ground_preconditions_hold,
     initial_state,
     robot_preconditions,
     translate_robot_effects,
+    unique_branch_valid,
 )
 
 
@@ -86,12 +87,8 @@ class ExploratoryDecomposer:
 
     def _unique_branch(self) -> list[list[int]]:
         """§7.7: every decomposition valid in the initial state is its own decomposition."""
-        out = []
-        for t in self.tg.tasks():
-            for d in self.tg.decompositions_of(t.index):
-                if ground_preconditions_hold(d.decomposition, self.initial):
-                    out.append([d.index])
-        return out
+        return [[d.index] for t in self.tg.tasks() for d in self.tg.decompositions_of(t.index)
+                if unique_branch_valid(self.tg, d, self.initial, self.gm, self.config)]
 
     def _in_graph_order(self, ids: set[str]) -> list[str]:
         """Decomposition ids in Task Graph vertex order: the order in which the original applies
@@ -110,32 +107,46 @@ class ExploratoryDecomposer:
         return self.pos < len(self.queue) and self.tg.vertices[self.queue[self.pos]].parent == v
 
     def _visit(self, effects_in: dict[str, Effects]) -> dict[str, Effects]:
+        """Visit the next vertex of the queue; ``effects_in`` are the effects of the
+        decompositions that precede it in an enclosing sequence (§7.3)."""
         v = self._pop()
         if v.kind == ATASK:
             return self._task(v, effects_in)
-        return self._operator(v)
+        return self._operator(v, effects_in)
 
-    def _operator(self, v: Vertex) -> dict[str, Effects]:
+    def _operator(self, v: Vertex, effects_in: dict[str, Effects]) -> dict[str, Effects]:
+        """Visit an operator's children; returns the effects of its subtree's decompositions.
+
+        Every child sees what precedes the operator, and a sequence's child also what its
+        earlier siblings did.  (The original starts a nested operator's children from the
+        initial state, so a task could ignore a task that its SEQ constraints put before it;
+        docs/deviations.md.)"""
         E: dict[str, Effects] = {}
         if v.content == ";":
             while self._front_is_child_of(v.index):
-                E.update(self._visit(E))
+                E.update(self._visit({**effects_in, **E}))
         elif v.content == "#" and self.tg.is_or(v.index):
             saved = self.vmds
             collected: list[_VMD] = []
             while self._front_is_child_of(v.index):
                 self.vmds = [(_VMD(list(m.order), set(m.ids))) for m in saved]
-                E.update(self._visit({}))
+                E.update(self._visit(effects_in))
                 collected.extend(self.vmds)
             self.vmds = collected
         else:
             while self._front_is_child_of(v.index):
-                E.update(self._visit({}))
+                E.update(self._visit(effects_in))
             if v.content == "#":
                 self._current_op = v.index
                 self._solve_conflicts(E)
-        test = achieve_test(v, self.gm, self.config)
-        if test is not None:
+        self._achieve(v, {**effects_in, **E})
+        return E
+
+    def _achieve(self, v: Vertex, E: dict[str, Effects]) -> None:
+        """§7.5: drop the partial decompositions whose state after ``v``'s subtree (the initial
+        state changed by the effects ``E`` of the subtree's chosen decompositions and of those
+        before it) violates an achieve condition checked at ``v``."""
+        for goal, test in achieve_tests(self.tg, v.index, self.gm, self.config):
             kept = []
             for m in self.vmds:
                 state = self.initial.copy()
@@ -145,10 +156,9 @@ class ExploratoryDecomposer:
                 if holds(test, state.fact, state.value):
                     kept.append(m)
             if not kept and self.vmds:
-                self._dropped_all(f"{self.gm.source}: goal {v.achieve_goal}: No decomposition satisfied achieve "
-                                  f"condition of goal {v.achieve_goal}")
+                self._dropped_all(f"{self.gm.source}: goal {goal}: No decomposition satisfied achieve "
+                                  f"condition of goal {goal}")
             self.vmds = kept
-        return E
 
     def _solve_conflicts(self, E: dict[str, Effects]) -> None:
         kept = []
@@ -217,4 +227,5 @@ class ExploratoryDecomposer:
                 "`decompose --explain` to see which)"
             )
         self.vmds = emitted
+        self._achieve(v, {**effects_in, **accepted})
         return accepted

@@ -10,13 +10,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable
 
-from ..conditions import AllOf, Test, compare, translate
+from ..conditions import AllOf, Test, compare, holds, translate
 from ..constraints import EC, SEQ, Constraint
+from ..errors import MissionError
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Domain, Literal
 from ..query import Binding
-from ..taskgraph import Decomposition, Vertex
+from ..taskgraph import Decomposition, TaskGraph, Vertex
 from ..world import InitialState
 
 AtomKey = tuple[str, tuple[str, ...]]
@@ -206,3 +207,47 @@ def achieve_test(vertex: Vertex, gm: GoalModel, config: Configuration) -> Test |
     if goal.achieve_condition is None:
         return None
     return translate(goal.achieve_condition, vertex.var_maps, config, where)
+
+
+def achieve_tests(tg: TaskGraph, v: int, gm: GoalModel, config: Configuration) -> list[tuple[str, Test]]:
+    """(goal, condition) pairs to check once vertex ``v``'s subtree is done (§7.5): the vertex's
+    own achieve condition and those of the achieve goals trimming removed above it.
+
+    The original loses the latter: a means-end achieve goal (one child) is not an operator, so
+    trimming drops it with its condition (docs/deviations.md)."""
+    out = []
+    own = achieve_test(tg.vertices[v], gm, config)
+    if own is not None:
+        out.append((tg.vertices[v].achieve_goal or "", own))
+    for vertex in tg.achieve_carried.get(v, ()):
+        try:
+            test = achieve_test(vertex, gm, config)
+        except MissionError:
+            # a condition no semantic mapping translates speaks of unknown facts, which hold
+            # (the reference object-picking mission has one: current_room.objects_picked)
+            continue
+        if test is not None:
+            out.append((vertex.achieve_goal or "", test))
+    return out
+
+
+def unique_branch_valid(tg: TaskGraph, dec: Vertex, initial: State, gm: GoalModel, config: Configuration) -> bool:
+    """§7.7: whether a decomposition of a unique-branch mission is a mission decomposition on its
+    own: its preconditions hold in the initial state, and so does every achieve condition above
+    its task once its effects are applied.  (The original skips the achieve conditions here,
+    so a mission whose only task undoes its own goal was "valid"; docs/deviations.md.)"""
+    assert dec.decomposition is not None
+    if not ground_preconditions_hold(dec.decomposition, initial):
+        return False
+    tests = []
+    v = tg.vertices[dec.parent].parent
+    while v >= 0:
+        test = achieve_test(tg.vertices[v], gm, config)
+        if test is not None:
+            tests.append(test)
+        v = tg.vertices[v].parent
+    if not tests:
+        return True
+    state = initial.copy()
+    state.apply(effects_of(dec.decomposition))
+    return all(holds(t, state.fact, state.value) for t in tests)
