@@ -53,6 +53,10 @@ class Vertex:
     instance: TaskInstance | None = None
     decomposition: Decomposition | None = None
     var_maps: Mapping[str, Binding] = field(default_factory=dict)  # variable values at this node
+    # goal/operator vertices: a creation condition false in the initial state that an earlier task
+    # can make true (§5.2); task vertices: every such condition above them, which must hold
+    # where the task starts
+    contexts: tuple[Test, ...] = ()
 
 
 @dataclass
@@ -221,6 +225,7 @@ class _Builder:
             pending: list[int] = []
             if not self._enabled(test, parent, pending):
                 return  # a false context that nothing enables: the branch disappears
+            vertex.contexts = (test,)
             tg.add(vertex)
             for d in pending:
                 self.cd_edges.append((d, vertex.index))
@@ -242,7 +247,13 @@ class _Builder:
                 "(tasks under a goal with Group=False are executed by one robot: set RobotNumber to 1)",
                 f"{self.gm.source}: task {inst.gm_task}",
             )
-        tv = tg.add(Vertex(-1, ATASK, inst.id, parent.index, parent.group, parent.divisible, instance=inst))
+        contexts: list[Test] = []
+        up = parent.index
+        while up >= 0:
+            contexts.extend(tg.vertices[up].contexts)
+            up = tg.vertices[up].parent
+        tv = tg.add(Vertex(-1, ATASK, inst.id, parent.index, parent.group, parent.divisible, instance=inst,
+                           contexts=tuple(contexts)))
         tg.add_edge(parent.index, tv.index, edge)
         binding = inst.binding
         for n, path in enumerate(self.paths[inst.name], start=1):

@@ -27,6 +27,7 @@ from .semantics import (
     ConstraintIndex,
     Effects,
     achieve_tests,
+    context_enablers,
     contradicts_itself,
     effects_of,
     initial_state,
@@ -169,6 +170,7 @@ class Encoder:
         self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
         index = ConstraintIndex.of(constraints)
         self.ec, self.seq_after = index.ec, index.seq_after
+        self.enablers = context_enablers(tg)
         self.x: dict[int, Lit] = {}
         self.active: dict[int, Lit] = {}
         self.or_lits: dict[tuple[int, int], Lit] = {}
@@ -356,7 +358,12 @@ class Encoder:
 
     def _task_rules(self, t: int) -> None:
         tg = self.tg
-        seen = self._preceding(t)
+        seen = self._preceding(t) | self.enablers.get(t, set())
+        for i, context in enumerate(tg.vertices[t].contexts):
+            ok = self._state_test(context, seen, f"context({tg.vertices[t].content})")
+            self.m.clause([neg(self.active[t]), ok], self._label(
+                f"context:{t}:{i}", f"task instance {tg.vertices[t].content}: the creation condition "
+                f"{_show_test(context)} that an earlier task enables does not hold where it starts"))
         for dv in tg.decompositions_of(t):
             d = dv.index
             dec = dv.decomposition

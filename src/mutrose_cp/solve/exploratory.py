@@ -22,6 +22,7 @@ from .semantics import (
     ConstraintIndex,
     Effects,
     achieve_tests,
+    context_enablers,
     effects_of,
     ground_preconditions_hold,
     initial_state,
@@ -55,6 +56,7 @@ class ExploratoryDecomposer:
         self.by_id = {d.content: d.index for d in tg.decompositions()}
         index = ConstraintIndex.of(constraints)
         self.ec_partners, self.seq_after = index.ec, index.seq_after
+        self.enablers = context_enablers(tg)
         self.robot_pre = {d.index: robot_preconditions(domain, d.decomposition) for d in tg.decompositions()}
 
     # ------------------------------------------------------------------------------------------
@@ -205,6 +207,7 @@ class ExploratoryDecomposer:
 
     def _task(self, v: Vertex, effects_in: dict[str, Effects]) -> dict[str, Effects]:
         decs = self.tg.decompositions_of(v.index)
+        enablers = self.enablers.get(v.index, set())
         accepted: dict[str, Effects] = {}
         emitted: list[_VMD] = []
         for m in self.vmds:
@@ -213,6 +216,10 @@ class ExploratoryDecomposer:
             for key in self._in_graph_order(work):
                 if key in effects_in:
                     base.apply(effects_in[key])
+                elif self.by_id[key] in enablers:
+                    base.apply(self.effects[self.by_id[key]])
+            if not all(holds(c, base.fact, base.value) for c in v.contexts):
+                continue  # an enabled creation condition does not hold where the task starts
             for d in decs:
                 if not ground_preconditions_hold(d.decomposition, base):
                     continue

@@ -17,7 +17,7 @@ from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Domain, Literal
 from ..query import Binding
-from ..taskgraph import Decomposition, TaskGraph, Vertex
+from ..taskgraph import CD, Decomposition, TaskGraph, Vertex
 from ..world import InitialState
 
 AtomKey = tuple[str, tuple[str, ...]]
@@ -117,6 +117,19 @@ def contradicts_itself(dec: Decomposition) -> bool:
             if required.setdefault((c.predicate, c.args), c.positive) != c.positive:
                 return True
     return False
+
+
+def context_enablers(tg: TaskGraph) -> dict[int, set[int]]:
+    """Task vertex -> the decompositions with a context-dependency edge into it (§5.2).
+
+    Such a decomposition makes the task's context true and the SEQ constraints put it first,
+    so the task sees its effects (the original checks the task against the state without
+    them; docs/deviations.md)."""
+    out: dict[int, set[int]] = {}
+    for d in tg.decompositions():
+        for t in tg.out(d.index, CD):
+            out.setdefault(t, set()).add(d.index)
+    return out
 
 
 def ground_preconditions_hold(dec: Decomposition, state: State) -> bool:
