@@ -90,6 +90,36 @@ def cmd_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_validate(args: argparse.Namespace) -> int:
+    """Check an output file against the mission: exit 0 when every listed mission
+    decomposition is valid, 1 when some is not (each violation on stdout), 2 on bad input."""
+    from .io.decomposition_output import load_decomposition_output
+    from .validate import validate
+
+    if len(args.inputs) not in (2, 4):
+        raise MissionError("expected HDDL GM CONFIG OUTPUT, or MISSION_DIR OUTPUT")
+    *mission_inputs, output_path = args.inputs
+    args.inputs = mission_inputs
+    hddl, gm, cfg, _folder = _inputs(args)
+    mission = Mission.load(hddl, gm, cfg)
+    output = load_decomposition_output(output_path)
+    report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state, output)
+    for violation in report.violations:
+        print(f"{output_path}: {violation}")
+    if not args.quiet:
+        for note in report.notes:
+            print(f"note: {note}", file=sys.stderr)
+    bad = sorted({v.decomposition for v in report.violations if v.decomposition is not None})
+    file_level = sum(1 for v in report.violations if v.decomposition is None)
+    _summary(args, {"command": "validate", "valid": report.valid, "checked": report.checked,
+                    "invalid_decompositions": bad, "violations": [str(v) for v in report.violations],
+                    "notes": report.notes},
+             f"{'valid' if report.valid else 'NOT valid'}: {report.checked - len(bad)} of {report.checked} mission "
+             f"decompositions valid" + (f", {file_level} problems in the file" if file_level else "")
+             + f" ({hddl.name}, {gm.name}, {cfg.name}, {Path(output_path).name})")
+    return 0 if report.valid else 1
+
+
 def _costs(mission: Mission, path: str | None) -> dict[int, int]:
     """Cost of each decomposition vertex: its number of actions, or the sum of per-action and
     per-method costs from a JSON cost file ``{"actions": {name: cost}, "methods": {name: cost},
@@ -320,6 +350,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
     common(p)
     p.set_defaults(func=cmd_count)
+
+    p = sub.add_parser("validate", help="check an output file (ours or the original's) against the mission")
+    common(p)
+    p.set_defaults(func=cmd_validate)
+    p.usage = "mutrose-cp validate [-h] [--config CONFIG] [-q] [--json-summary] (HDDL GM CONFIG | MISSION_DIR) OUTPUT"
 
     p = sub.add_parser("graph", help="draw the expanded goal model, the Task Graph or one decomposition")
     common(p)

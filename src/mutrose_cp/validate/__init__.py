@@ -1,0 +1,602 @@
+"""An independent validator of decomposition outputs: the analogue of VAL for PDDL plans.
+
+``validate`` takes the mission inputs and an output file (ours or the original tool's, JSON or
+XML) and checks every listed mission decomposition against the inputs.  It uses the readers
+(``io/``, the initial world state) and nothing of the decomposers: the method tree of each task
+is rebuilt from the domain (:mod:`.htn_match`), the order of tasks is taken from the file's
+constraints, and conditions are translated with the semantic mappings here.  So a mistake the
+two decomposers share shows up as a violation.
+
+The semantics checked (docs/validate.md):
+
+* the tasks of a mission decomposition exist, one decomposition per task instance; every task
+  instance outside OR branches is present; an OR goal has one chosen branch per instance;
+* the SEQ and FB constraints between the chosen tasks admit an order (no cycle);
+* each task's actions are a decomposition of the task by the domain's methods; replayed from the
+  state the task starts in, every ground method and action precondition holds (an atom the world
+  does not know is assumed on first use, so a decomposition contradicting itself fails);
+* a task starts in the initial world changed by the tasks that the SEQ and FB constraints put
+  before it (transitively, without the fallback alternatives it replaces), applied in file
+  order; tasks that meet under a parallel operator never set one fact both ways;
+* condition contexts hold in the initial state or where their tasks start (an earlier task
+  made them true); achieve conditions (for a ``forAll``, for every element) hold after the
+  goal's tasks;
+* execution-constrained tasks have compatible robot numbers.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+
+import networkx as nx
+
+from ..io.config import Configuration
+from ..io.decomposition_output import DecompositionOutput, OutputTask
+from ..io.expressions import Annotation, AnnotationLeaf, Atom, BoolOp, Condition
+from ..io.goal_model import GMNode, GoalModel
+from ..io.hddl import Comparison, Domain, Literal
+from ..world import InitialState
+from .htn_match import Matcher, Step
+
+AtomKey = tuple[str, tuple[str, ...]]
+EPSILON = 1e-9
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One reason a mission decomposition (or the file) is not valid, located."""
+
+    decomposition: int | None  # index in mission_decompositions; None for the whole file
+    task: str  # task id ("AT1_1|2") or goal id, "" when neither applies
+    message: str
+
+    def __str__(self) -> str:
+        where = [] if self.decomposition is None else [f"decomposition {self.decomposition}"]
+        if self.task:
+            where.append(self.task)
+        return f"{': '.join(where)}: {self.message}" if where else self.message
+
+
+@dataclass
+class Report:
+    checked: int = 0  # mission decompositions checked
+    violations: list[Violation] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)  # what could not be checked, and why
+
+    @property
+    def valid(self) -> bool:
+        return not self.violations
+
+
+# ---------------------------------------------------------------------------------------------
+# World states
+
+
+class State:
+    """Known facts and function values; an absent atom is unknown."""
+
+    def __init__(self, facts: dict[AtomKey, bool], values: dict[AtomKey, float]) -> None:
+        self.facts = facts
+        self.values = values
+
+    @classmethod
+    def initial(cls, initial: InitialState) -> "State":
+        facts: dict[AtomKey, bool] = {}
+        for lit in initial.literals:
+            facts.setdefault((lit.predicate, lit.args), lit.positive)
+        values: dict[AtomKey, float] = {}
+        for key, value in initial.functions:
+            values.setdefault(key, value)
+        return cls(facts, values)
+
+    def copy(self) -> "State":
+        return State(dict(self.facts), dict(self.values))
+
+
+@dataclass
+class TaskEffects:
+    """What a replayed task changed: final values of facts, numeric changes in order."""
+
+    facts: dict[AtomKey, bool] = field(default_factory=dict)
+    numeric: list[tuple[AtomKey, str, float]] = field(default_factory=list)
+
+    def apply(self, state: State) -> None:
+        state.facts.update(self.facts)
+        for key, kind, amount in self.numeric:
+            if kind == "assign":
+                state.values[key] = amount
+            elif key in state.values:
+                state.values[key] += amount if kind == "increase" else -amount
+
+
+def _compare(value: float, op: str, bound: float) -> bool:
+    return {
+        "=": lambda: abs(value - bound) < EPSILON,
+        "<>": lambda: abs(value - bound) >= EPSILON,
+        ">": lambda: value > bound,
+        "<": lambda: value < bound,
+        ">=": lambda: value >= bound - EPSILON,
+        "<=": lambda: value <= bound + EPSILON,
+    }[op]()
+
+
+# ---------------------------------------------------------------------------------------------
+# Grounding with a task's argument values
+
+
+def _values(task: OutputTask) -> dict[str, tuple[str, ...]]:
+    """Parameter -> ground values (a collection value ``[a,b]`` gives several)."""
+    out: dict[str, tuple[str, ...]] = {}
+    for name, _type, value in task.arguments:
+        if not value:
+            continue
+        if value.startswith("[") and value.endswith("]"):
+            out[name] = tuple(v.strip() for v in value[1:-1].split(",") if v.strip())
+        else:
+            out[name] = (value,)
+    return out
+
+
+def _groundings(args: tuple[str, ...], values: dict[str, tuple[str, ...]]) -> list[tuple[str, ...]]:
+    """Every ground instance of ``args``; empty when some variable is unbound."""
+    choices = []
+    for a in args:
+        if a.startswith("?"):
+            if a not in values:
+                return []
+            choices.append(values[a])
+        else:
+            choices.append((a,))
+    return [tuple(c) for c in itertools.product(*choices)]
+
+
+# ---------------------------------------------------------------------------------------------
+# The validator
+
+
+class _Validator:
+    def __init__(self, domain: Domain, gm: GoalModel, config: Configuration, initial: InitialState,
+                 output: DecompositionOutput) -> None:
+        self.domain = domain
+        self.gm = gm
+        self.config = config
+        self.out = output
+        self.w0 = State.initial(initial)
+        self.report = Report()
+        self.order = {k: i for i, k in enumerate(output.tasks)}
+        self.seq = nx.DiGraph()
+        self.seq_fb = nx.DiGraph()
+        self.seq.add_nodes_from(output.tasks)
+        self.seq_fb.add_nodes_from(output.tasks)
+        self.ec: list[tuple[str, str]] = []
+        for c in output.constraints:
+            missing = [k for k in (c.first, c.second) if k not in output.tasks]
+            if missing:
+                self._file(f"{c.where}: constraint names unknown task {missing[0]}")
+                continue
+            if c.kind == "SEQ":
+                self.seq.add_edge(c.first, c.second)
+                self.seq_fb.add_edge(c.first, c.second)
+            elif c.kind == "FB":
+                self.seq_fb.add_edge(c.first, c.second)
+            elif c.kind == "EC":
+                self.ec.append((c.first, c.second))
+            else:
+                self._file(f"{c.where}: unknown constraint type {c.kind!r}")
+        self.var_types = {d.name: d.base_type for n in gm.nodes for d in (*n.controls, *n.monitors) if d.type}
+        self.gm_task_path = {n.id: self._ancestors(n) for n in gm.nodes if n.kind == "task"}
+        self._replays: dict[str, tuple[TaskEffects, list[str]] | None] = {}
+        self._noted: set[str] = set()
+
+    # -- reporting -----------------------------------------------------------------------------
+    def _file(self, message: str) -> None:
+        self.report.violations.append(Violation(None, "", message))
+
+    def _note(self, message: str) -> None:
+        if message not in self._noted:
+            self._noted.add(message)
+            self.report.notes.append(message)
+
+    def _ancestors(self, node: GMNode) -> list[GMNode]:
+        out = []
+        cur = node.parent
+        while cur is not None:
+            n = self.gm.node(cur)
+            out.append(n)
+            cur = n.parent
+        return out
+
+    # -- run -------------------------------------------------------------------------------------
+    def run(self) -> Report:
+        for i, md in enumerate(self.out.mission_decompositions):
+            self.report.checked += 1
+            self._decomposition(i, md)
+        return self.report
+
+    def _decomposition(self, i: int, md: tuple[str, ...]) -> None:
+        bad = [k for k in md if k not in self.out.tasks]
+        for k in bad:
+            self.report.violations.append(Violation(i, k, "not a task of the file"))
+        keys = [k for k in md if k in self.out.tasks]
+        errors: list[Violation] = []
+        self._structure(i, keys, errors)
+        self._ordering(i, keys, errors)
+        states = self._replay_all(i, keys, errors)
+        self._conflicts(i, keys, errors)
+        self._conditions(i, keys, states, errors)
+        self._robots(i, keys, errors)
+        self.report.violations.extend(errors)
+
+    # -- structure: instances, AND/OR choices ------------------------------------------------------
+    def _structure(self, i: int, keys: list[str], errors: list[Violation]) -> None:
+        tasks = [self.out.tasks[k] for k in keys]
+        seen: dict[str, str] = {}
+        for t in tasks:
+            if t.instance in seen:
+                errors.append(Violation(i, t.id, f"task instance {t.instance} is decomposed twice "
+                                                 f"({seen[t.instance]} and {t.id})"))
+            seen.setdefault(t.instance, t.id)
+            if t.gm_task not in self.gm_task_path:
+                errors.append(Violation(i, t.id, f"{t.gm_task} is not a task of the goal model"))
+        chosen = set(seen)
+        every = {t.instance: t for t in self.out.tasks.values()}
+        for inst, t in every.items():
+            path = self.gm_task_path.get(t.gm_task)
+            if path is not None and not any(g.or_decomposed for g in path) and inst not in chosen:
+                errors.append(Violation(i, inst, f"task instance {inst} is required (no OR goal above "
+                                                 f"{t.gm_task}) but none of its decompositions is chosen"))
+        for goal in self.gm.nodes:
+            if goal.kind == "goal" and goal.or_decomposed:
+                self._or_goal(i, goal, chosen, errors)
+
+    def _branch_tasks(self, key: str) -> list[str]:
+        node = self.gm.node(key)
+        if node.kind == "task":
+            return [node.id]
+        return [t for c in node.children for t in self._branch_tasks(c)]
+
+    def _or_goal(self, i: int, goal: GMNode, chosen: set[str], errors: list[Violation]) -> None:
+        """At most one branch of an OR goal per instance (instances of one forAll element share
+        their number)."""
+        for branch in goal.children:
+            for t in self._branch_tasks(branch):
+                between = self.gm_task_path.get(t, [])[: self._depth_below(t, goal)]
+                if any(n.forall is not None for n in between):
+                    self._note(f"goal {goal.id}: an OR branch holds its own forAll; its choices per element "
+                               "are not checked")
+                    return
+        by_number: dict[str, set[str]] = {}
+        for branch in goal.children:
+            tasks = set(self._branch_tasks(branch))
+            for inst in chosen:
+                gm_task, _, number = inst.partition("_")
+                if gm_task in tasks:
+                    by_number.setdefault(number, set()).add(self.gm.node(branch).id)
+        for number, branches in sorted(by_number.items()):
+            if len(branches) > 1:
+                errors.append(Violation(i, goal.id, f"OR goal {goal.id} has more than one chosen branch "
+                                                    f"({', '.join(sorted(branches))}) for instance _{number}"))
+
+    def _depth_below(self, gm_task: str, goal: GMNode) -> int:
+        path = self.gm_task_path.get(gm_task, [])
+        for d, n in enumerate(path):
+            if n.key == goal.key:
+                return d
+        return 0
+
+    # -- how two tasks are related by the runtime annotations -------------------------------------
+    def _relation(self, a: OutputTask, b: OutputTask) -> str:
+        """The operator under which two tasks meet: ``;``, ``#``, ``FALLBACK`` or ``OR``.
+
+        Read from the goal model alone: the lowest goal above both, and in its annotation the
+        lowest operator over the two children that lead to them (annotation entries pair with
+        children by position, as in the original).  Instances of different forAll elements
+        meet under the forAll's parallel node."""
+        if a.gm_task not in self.gm_task_path or b.gm_task not in self.gm_task_path:
+            return "#"
+        up_a = [self.gm.node(a.gm_task)] + self.gm_task_path[a.gm_task]
+        up_b = [self.gm.node(b.gm_task)] + self.gm_task_path[b.gm_task]
+        keys_b = [n.key for n in up_b]
+        depth_a = next(d for d, n in enumerate(up_a) if n.key in keys_b)
+        meet = up_a[depth_a]
+        number_a, number_b = a.instance.partition("_")[2], b.instance.partition("_")[2]
+        if number_a != number_b and any(n.forall is not None for n in up_a[depth_a:]):
+            return "#"  # different elements of a forAll above both
+        if depth_a == 0 or keys_b.index(meet.key) == 0:
+            return "#"
+        if meet.or_decomposed:
+            return "OR"
+        child_a, child_b = up_a[depth_a - 1].key, up_b[keys_b.index(meet.key) - 1].key
+        if meet.annotation is None:
+            return "#"
+        pos_a, pos_b = meet.children.index(child_a), meet.children.index(child_b)
+        return _lowest_operator(meet.annotation, pos_a, pos_b) or "#"
+
+    # -- ordering ----------------------------------------------------------------------------------
+    def _ordering(self, i: int, keys: list[str], errors: list[Violation]) -> None:
+        sub = self.seq_fb.subgraph(keys)
+        if not nx.is_directed_acyclic_graph(sub):
+            cycle = nx.find_cycle(sub)
+            errors.append(Violation(i, "", "the SEQ/FB constraints between its tasks form a cycle: "
+                                           + " -> ".join(self.out.tasks[a].id for a, _ in cycle)))
+
+    def _predecessors(self, key: str, chosen: set[str]) -> list[str]:
+        """Chosen tasks that the SEQ and FB constraints put before ``key``, in file order,
+        without the alternatives a fallback replaces (they failed when ``key`` runs)."""
+        task = self.out.tasks[key]
+        before = nx.ancestors(self.seq_fb, key) & chosen
+        return sorted((p for p in before if self._relation(self.out.tasks[p], task) != "FALLBACK"),
+                      key=self.order.__getitem__)
+
+    def _state_before(self, keys: list[str], chosen: set[str]) -> State:
+        """The initial state changed by every chosen predecessor of ``keys`` (and not by them)."""
+        preds: set[str] = set()
+        for k in keys:
+            preds.update(self._predecessors(k, chosen))
+        preds -= set(keys)
+        state = self.w0.copy()
+        for p in sorted(preds, key=self.order.__getitem__):
+            replay = self._replays.get(p)
+            if replay is not None:
+                replay[0].apply(state)
+        return state
+
+    # -- replay of each task ---------------------------------------------------------------------------
+    def _replay_all(self, i: int, keys: list[str], errors: list[Violation]) -> dict[str, State]:
+        chosen = set(keys)
+        entry: dict[str, State] = {}
+        self._replays = {}
+        for k in nx.lexicographical_topological_sort(self.seq.subgraph(keys), key=self.order.__getitem__) \
+                if nx.is_directed_acyclic_graph(self.seq.subgraph(keys)) else sorted(keys, key=self.order.__getitem__):
+            start = self._state_before([k], chosen)
+            entry[k] = start
+            self._replays[k] = self._replay(i, self.out.tasks[k], start, errors)
+        return entry
+
+    def _replay(self, i: int, task: OutputTask, start: State, errors: list[Violation]) -> tuple[TaskEffects, list[str]] | None:
+        if task.name not in self.domain.task_by_name:
+            errors.append(Violation(i, task.id, f"{task.name} is not an abstract task of the domain"))
+            return None
+        root = [p.name for p in self.domain.task_by_name[task.name].parameters]
+        explanations = Matcher(self.domain, root, task.actions).explain(task.name)
+        if not explanations:
+            listed = ", ".join(a.name for a in task.actions) or "no actions"
+            errors.append(Violation(i, task.id, f"its actions ({listed}) are not a decomposition of {task.name} "
+                                                "by the domain's methods"))
+            return None
+        values = _values(task)
+        first_failure: list[str] | None = None
+        for steps in explanations:
+            effects, failures = self._run_steps(steps, values, start)
+            if not failures:
+                return effects, []
+            first_failure = first_failure or failures
+        assert first_failure is not None
+        for f in first_failure:
+            errors.append(Violation(i, task.id, f))
+        return None
+
+    def _run_steps(self, steps: list[Step], values: dict[str, tuple[str, ...]], start: State) -> tuple[TaskEffects, list[str]]:
+        """Replay one explanation; unknown atoms are assumed when first required."""
+        changed = TaskEffects()
+        facts: dict[AtomKey, bool] = {}  # changed facts
+        assumed: dict[AtomKey, bool] = {}
+        nums: dict[AtomKey, float | None] = {}
+        failures: list[str] = []
+        for step in steps:
+            what = f"{step.kind} {step.name}"
+            for c in step.preconditions:
+                for g in _groundings(c.args, values):
+                    if isinstance(c, Literal):
+                        key = (c.predicate, g)
+                        known = facts.get(key, start.facts.get(key, assumed.get(key)))
+                        if known is None:
+                            assumed[key] = c.positive
+                        elif known != c.positive:
+                            failures.append(f"precondition {_show_literal(c.predicate, g, c.positive)} of {what} "
+                                            f"(action {step.position + 1}) does not hold")
+                    else:
+                        key = (c.function, g)
+                        value = nums[key] if key in nums else start.values.get(key)
+                        if value is None:
+                            if c.op == "=" and not c.negated:
+                                nums[key] = float(c.value)
+                            continue
+                        if _compare(value, c.op, float(c.value)) == c.negated:
+                            failures.append(f"precondition {'not ' if c.negated else ''}{c.function}"
+                                            f"({', '.join(g)}) {c.op} {c.value:g} of {what} (action "
+                                            f"{step.position + 1}) does not hold: the value is {value:g}")
+            for e in step.effects:
+                for g in _groundings(e.args, values):
+                    facts[(e.predicate, g)] = e.positive
+                    changed.facts[(e.predicate, g)] = e.positive
+            for n in step.numeric_effects:
+                for g in _groundings(n.args, values):
+                    key = (n.function, g)
+                    old = nums[key] if key in nums else start.values.get(key)
+                    if n.kind == "assign":
+                        nums[key] = float(n.amount)
+                    elif old is not None:
+                        nums[key] = old + (n.amount if n.kind == "increase" else -n.amount)
+                    changed.numeric.append((key, n.kind, float(n.amount)))
+        return changed, failures
+
+    # -- parallel conflicts ------------------------------------------------------------------------
+    def _conflicts(self, i: int, keys: list[str], errors: list[Violation]) -> None:
+        for a, b in itertools.combinations(sorted(keys, key=self.order.__getitem__), 2):
+            if self._relation(self.out.tasks[a], self.out.tasks[b]) != "#":
+                continue
+            if nx.has_path(self.seq_fb, a, b) or nx.has_path(self.seq_fb, b, a):
+                continue  # ordered after all (a context dependency)
+            ra, rb = self._replays.get(a), self._replays.get(b)
+            if ra is None or rb is None:
+                continue
+            for atom, value in ra[0].facts.items():
+                if rb[0].facts.get(atom, value) != value:
+                    errors.append(Violation(i, self.out.tasks[a].id, f"parallel tasks {self.out.tasks[a].id} and "
+                                            f"{self.out.tasks[b].id} set {_show_literal(atom[0], atom[1], True)} "
+                                            "both true and false"))
+
+    # -- contexts and achieve conditions ---------------------------------------------------------
+    def _binding(self, task: OutputTask) -> dict[str, tuple[str, ...]]:
+        """Goal-model variables of a task, read back through its var_mapping."""
+        values = _values(task)
+        out: dict[str, tuple[str, ...]] = {}
+        node = self.gm.by_id.get(task.gm_task)
+        if node is not None and node.location and task.locations:
+            out[node.location] = task.locations
+        for vm in self.config.var_mapping:
+            if vm.task_id == task.gm_task:
+                for gm_var, hddl_var in vm.pairs:
+                    if hddl_var in values:
+                        out[gm_var] = values[hddl_var]
+        return out
+
+    def _conditions(self, i: int, keys: list[str], entry: dict[str, State], errors: list[Violation]) -> None:
+        chosen = set(keys)
+        tasks = [self.out.tasks[k] for k in keys]
+        for goal in self.gm.nodes:
+            if goal.kind != "goal":
+                continue
+            below = [t for t in tasks if any(a.key == goal.key for a in self.gm_task_path.get(t.gm_task, []))]
+            if not below:
+                continue
+            if goal.context is not None and goal.context.kind == "condition" and goal.context.condition is not None:
+                for t in below:
+                    # a creation condition holds when the mission starts, or an earlier task
+                    # makes it true before the goal's task starts
+                    binding = self._binding(t)
+                    if self._holds(goal.context.condition, binding, self.w0, goal) is not False:
+                        continue
+                    self._check(i, goal, "context condition", goal.context.condition, binding,
+                                entry.get(t.key), t.id, errors)
+            if goal.forall is not None and goal.forall.condition is not None:
+                self._after_groups(i, goal, "forAll condition", goal.forall.condition, below, chosen, errors,
+                                   group_by=goal.forall.iteration)
+            elif goal.achieve_condition is not None:
+                self._after_groups(i, goal, "achieve condition", goal.achieve_condition, below, chosen, errors)
+
+    def _after_groups(self, i: int, goal: GMNode, what: str, cond: Condition, below: list[OutputTask],
+                      chosen: set[str], errors: list[Violation], group_by: str | None = None) -> None:
+        """Evaluate ``cond`` after the goal's tasks, once per binding of its variables."""
+        names = _variables(cond) | ({group_by} if group_by else set())
+        groups: dict[tuple, list[OutputTask]] = {}
+        unbound: list[OutputTask] = []
+        numbers: dict[str, tuple] = {}  # instance number -> group of the tasks that bind the names
+        for t in below:
+            b = self._binding(t)
+            if not names <= b.keys():
+                unbound.append(t)
+                continue
+            key = tuple(sorted((n, b[n]) for n in names))
+            groups.setdefault(key, []).append(t)
+            numbers.setdefault(t.instance.partition("_")[2], key)
+        if not groups:
+            self._note(f"goal {goal.id}: the {what} uses {', '.join(sorted(names))}, which no task binds "
+                       "(Location or var_mapping): not checked")
+            return
+        for t in unbound:  # a task of the same forAll element (same instance number) joins its group
+            key = numbers.get(t.instance.partition("_")[2])
+            if key is not None:
+                groups[key].append(t)
+        for key, members in groups.items():
+            keys = [t.key for t in members]
+            state = self._state_before(keys, chosen)
+            for k in sorted(keys, key=self.order.__getitem__):
+                replay = self._replays.get(k)
+                if replay is not None:
+                    replay[0].apply(state)
+            self._check(i, goal, what, cond, dict(key), state, members[0].id, errors, after=True)
+
+    def _check(self, i: int, goal: GMNode, what: str, cond: Condition, binding: dict[str, tuple[str, ...]],
+               state: State | None, task: str, errors: list[Violation], after: bool = False) -> None:
+        if state is None:
+            return
+        result = self._holds(cond, binding, state, goal)
+        if result is False:
+            moment = f"after the tasks of {goal.id}" if after else f"where {task} starts"
+            bound = ", ".join(f"{k} = {','.join(v)}" for k, v in sorted(binding.items()) if k in _variables(cond))
+            errors.append(Violation(i, goal.id, f"{what} of goal {goal.id} ({_show_condition(cond)}"
+                                                f"{'; ' + bound if bound else ''}) does not hold {moment}"))
+
+    def _holds(self, cond: Condition, binding: dict[str, tuple[str, ...]], state: State, goal: GMNode) -> bool | None:
+        """Open-world evaluation; None when an atom cannot be translated."""
+        if isinstance(cond, BoolOp):
+            parts = [self._holds(c, binding, state, goal) for c in cond.children]
+            if any(p is None for p in parts):
+                return None
+            return all(parts) if cond.op == "&&" else any(parts)
+        return self._atom(cond, binding, state, goal)
+
+    def _atom(self, atom: Atom, binding: dict[str, tuple[str, ...]], state: State, goal: GMNode) -> bool | None:
+        relates = self.var_types.get(atom.variable, "")
+        numeric = atom.op in ("=", "<>", ">", "<", ">=", "<=")
+        for m in self.config.semantic_mapping:
+            if (m.type == "attribute" and m.name == atom.attribute and m.relates_to == relates
+                    and m.mapped_type == ("function" if numeric else "predicate")):
+                values = binding.get(atom.variable, ())
+                if numeric:
+                    bound = float(atom.value)
+                    known = [state.values.get((m.pred, (v,))) for v in values]
+                    return all(k is None or _compare(k, atom.op or "=", bound) for k in known)
+                facts = [state.facts.get((m.pred, (v,))) for v in values]
+                return all(f is None or f == (not atom.negated) for f in facts)
+        self._note(f"goal {goal.id}: {atom.text} has no attribute mapping for type {relates or '?'}: not checked")
+        return None
+
+    # -- robots ----------------------------------------------------------------------------------------
+    def _robots(self, i: int, keys: list[str], errors: list[Violation]) -> None:
+        chosen = set(keys)
+        for a, b in self.ec:
+            if a in chosen and b in chosen:
+                ra, rb = self.out.tasks[a].robots, self.out.tasks[b].robots
+                if ra is None or rb is None:
+                    continue
+                if max(ra.min, rb.min) > min(ra.max, rb.max) or (ra.fixed and rb.fixed and ra.min != rb.min):
+                    errors.append(Violation(i, self.out.tasks[a].id, f"execution-constrained with "
+                                            f"{self.out.tasks[b].id}, but their robot numbers "
+                                            f"({_show_robots(ra)} and {_show_robots(rb)}) are incompatible"))
+
+
+def _leaves(annotation: Annotation) -> int:
+    return 1 if isinstance(annotation, AnnotationLeaf) else sum(_leaves(c) for c in annotation.children)
+
+
+def _lowest_operator(annotation: Annotation, a: int, b: int) -> str | None:
+    """The operator of the smallest sub-expression holding leaf positions ``a`` and ``b``."""
+    if isinstance(annotation, AnnotationLeaf):
+        return None
+    start = 0
+    for child in annotation.children:
+        n = _leaves(child)
+        if start <= a < start + n and start <= b < start + n:
+            return _lowest_operator(child, a - start, b - start)
+        start += n
+    return annotation.op
+
+
+def _variables(cond: Condition) -> set[str]:
+    if isinstance(cond, BoolOp):
+        return set().union(*(_variables(c) for c in cond.children))
+    return {cond.variable} if cond.variable else set()
+
+
+def _show_literal(predicate: str, args: tuple[str, ...], positive: bool) -> str:
+    atom = f"{predicate}({', '.join(args)})"
+    return atom if positive else f"not {atom}"
+
+
+def _show_condition(cond: Condition) -> str:
+    if isinstance(cond, BoolOp):
+        return f" {cond.op} ".join(_show_condition(c) for c in cond.children)
+    return cond.text
+
+
+def _show_robots(r) -> str:
+    return str(r.min) if r.fixed else f"[{r.min},{r.max}]"
+
+
+def validate(domain: Domain, gm: GoalModel, config: Configuration, initial: InitialState,
+             output: DecompositionOutput) -> Report:
+    """Check every mission decomposition of ``output`` against the mission inputs."""
+    return _Validator(domain, gm, config, initial, output).run()
