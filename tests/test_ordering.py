@@ -1,4 +1,5 @@
-"""Regression tests for the order in which effects are applied and for self-contradictory
+"""Regression tests for the world state a task sees (effect order, enclosing sequences, context
+dependencies, achieve conditions) and for self-contradictory or inapplicable methods
 preconditions (both decomposers), on minimal missions built with the mission generator's model.
 
 Effects of the decompositions a task sees are applied in Task Graph vertex order (§7.3, the
@@ -106,3 +107,78 @@ def test_effects_printed_in_declaration_order(tmp_path):
     assert main(["decompose", str(folder), "-q", "-o", str(out)]) == 0
     task = json.loads(out.read_text())["tasks"]["t0"]
     assert [e["predicate"] for e in task["effects"]] == ["not ?r.is_charged", "Room1.is_lit"]
+
+
+# ---------------------------------------------------------------------------------------------
+# What a task sees: every task its SEQ constraints put before it (docs/deviations.md)
+
+
+def test_nested_operator_sees_what_precedes_it(tmp_path):
+    """[LightOff;(InspectLit#Wait)] with the light on: the SEQ constraints put LightOff before
+    the parallel block, so InspectLit finds the light off.  (The original starts a nested
+    operator's children from the initial state and lists the decomposition.)"""
+    tree = GoalNode((TaskNode("LightOff"), GoalNode((TaskNode("InspectLit"), TaskNode("Wait")), annotation=("flat", "#"))),
+                    annotation=("flat", ";"))
+    _mission, exploratory, cpsat = _solve(_spec(tree, lit=True), tmp_path)
+    assert exploratory == cpsat == []
+
+
+def test_context_enabler_effects_are_seen(tmp_path):
+    """[LightOn#G(context: lit) -> InspectLit], light off: LightOn enables the context through
+    the parallel operator, the SEQ constraint puts it first, so InspectLit finds the light on."""
+    dependent = GoalNode((TaskNode("InspectLit"),), condition="current_room.is_lit")
+    tree = GoalNode((TaskNode("LightOn"), dependent), annotation=("flat", "#"))
+    mission, exploratory, cpsat = _solve(_spec(tree, lit=False), tmp_path)
+    ids = {d.index: d.content for d in mission.task_graph.decompositions()}
+    assert [(ids[c.first], ids[c.second]) for c in mission.constraints if c.kind == "SEQ"] == [("AT1_1|1", "AT2_1|1")]
+    assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1"}]
+
+
+def test_enabled_context_must_hold_where_the_task_starts(tmp_path):
+    """[LightOn;LightOff;G(context: lit) -> Wait], light off: LightOn enables the context, but
+    LightOff undoes it before Wait starts, so no mission decomposition is valid."""
+    dependent = GoalNode((TaskNode("Wait"),), condition="current_room.is_lit")
+    tree = GoalNode((TaskNode("LightOn"), TaskNode("LightOff"), dependent), annotation=("flat", ";"))
+    _mission, exploratory, cpsat = _solve(_spec(tree, lit=False), tmp_path)
+    assert exploratory == cpsat == []
+    # without LightOff the enabled context holds
+    tree = GoalNode((TaskNode("LightOn"), TaskNode("Wait"), dependent), annotation=("flat", ";"))
+    _mission, exploratory, cpsat = _solve(_spec(tree, lit=False), tmp_path / "enabled")
+    assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1", "AT3_1|1"}]
+
+
+def test_means_end_achieve_goal_keeps_its_condition(tmp_path):
+    """An achieve goal with a single child is not an operator; trimming removes it, and the
+    original loses its condition.  Here G(achieve: lit) -> LightOff can never be achieved."""
+    achieve = GoalNode((TaskNode("LightOff"),), achieve="current_room.is_lit")
+    tree = GoalNode((TaskNode("Wait"), achieve), annotation=("flat", ";"))
+    _mission, exploratory, cpsat = _solve(_spec(tree, lit=True), tmp_path)
+    assert exploratory == cpsat == []
+    achieve = GoalNode((TaskNode("LightOn"),), achieve="current_room.is_lit")
+    tree = GoalNode((TaskNode("Wait"), achieve), annotation=("flat", ";"))
+    _mission, exploratory, cpsat = _solve(_spec(tree, lit=False), tmp_path / "kept")
+    assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1"}]
+
+
+def test_unique_branch_decomposition_meets_the_achieve_condition(tmp_path):
+    """A mission of one task (a unique-branch Task Graph): its decomposition must still leave
+    the forAll condition true; the original skips achieve conditions there."""
+    tree = GoalNode((TaskNode("LightOff"),))
+    spec = _spec(tree, lit=True)
+    spec = MissionSpec(spec.room_predicates, spec.robot_predicates, spec.actions, spec.tasks, spec.rooms,
+                       spec.query_active, "current_room.is_lit", tree)
+    mission, exploratory, cpsat = _solve(spec, tmp_path)
+    assert mission.task_graph.unique_branch
+    assert exploratory == cpsat == []
+
+
+def test_a_subtask_without_executable_method_makes_its_method_inapplicable(tmp_path):
+    """Prepare's first method calls Inspect, whose only method can never run: the original drops
+    the subtask and keeps [wait-here] as a decomposition that skips the inspection."""
+    inspect = Task("Inspect", (Method("inspect-lit", (Lit("lit", "?rm", False),), ("inspect-lit",)),))
+    prepare = Task("Prepare", (Method("with-inspection", (), ("Inspect", "wait-here")),
+                               Method("light-only", (), ("switch-on",))))
+    tree = GoalNode((TaskNode("Prepare"), TaskNode("Wait")), annotation=("flat", ";"))
+    mission, exploratory, cpsat = _solve(_spec(tree, tasks=(inspect, prepare) + TASKS), tmp_path)
+    assert [[s.name for s in p.actions] for p in mission.paths["Prepare"]] == [["switch-on"]]
+    assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1"}]
