@@ -1,6 +1,6 @@
 """Regression tests for the world state a task sees (effect order, enclosing sequences, context
-dependencies, achieve conditions) and for self-contradictory or inapplicable methods
-preconditions (both decomposers), on minimal missions built with the mission generator's model.
+dependencies, achieve conditions) and for self-contradictory or inapplicable methods, in both
+decomposers, on minimal missions built with the mission generator's model.
 
 Effects of the decompositions a task sees are applied in Task Graph vertex order (§7.3, the
 order of the SEQ constraints), not in the string order of their ids, where ``AT10_1|1`` comes
