@@ -24,6 +24,7 @@ from .knowledge import (
     read_bytes,
     text_of,
 )
+from .text import decode_utf8
 
 
 @dataclass(frozen=True)
@@ -110,11 +111,7 @@ def load_configuration(path: str | os.PathLike[str]) -> Configuration:
     data = read_bytes(path, "configuration")
     ext = source.rsplit(".", 1)[-1].upper() if "." in os.path.basename(source) else ""
     if ext == "JSON":
-        try:
-            text = data.decode("utf-8-sig")
-        except UnicodeDecodeError as exc:
-            raise MissionError(Problem(source, f"configuration is not valid UTF-8: {exc.reason}")) from None
-        return parse_configuration_json(text, source)
+        return parse_configuration_json(decode_utf8(data, source, "configuration"), source)
     return parse_configuration_xml(data, source)
 
 

@@ -16,6 +16,7 @@ from lxml import etree
 
 from ..errors import MissionError, Problem, located
 from .knowledge import json_syntax_problem, read_bytes
+from .text import decode_utf8
 
 
 @dataclass(frozen=True)
@@ -78,10 +79,7 @@ def load_decomposition_output(path: str) -> DecompositionOutput:
     data = read_bytes(path, "decomposition output")
     if data.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
         return _from_xml(data, path)
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise MissionError(Problem(path, f"the output file is not UTF-8 text (byte {exc.start})")) from None
+    text = decode_utf8(data, path, "decomposition output")
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -148,7 +146,10 @@ def _from_json(doc: dict[str, Any], source: str) -> DecompositionOutput:
         inst = c.get("task_instances") if isinstance(c, dict) else None
         if not isinstance(inst, dict) or "t0" not in inst or "t1" not in inst:
             raise MissionError(Problem(f"{source}: constraints[{i}]", "expected task_instances with t0 and t1"))
-        constraints.append(OutputConstraint(str(c.get("type")), str(inst["t0"]), str(inst["t1"]), f"constraints[{i}]"))
+        kind = str(c.get("type"))
+        if kind == "EC" and "group" not in c and "divisible" not in c:
+            kind = "FB"  # the original writes a fallback constraint as an EC without group/divisible
+        constraints.append(OutputConstraint(kind, str(inst["t0"]), str(inst["t1"]), f"constraints[{i}]"))
     mds = tuple(tuple(str(k) for k in _list(md)) for md in _list(doc.get("mission_decompositions")))
     return DecompositionOutput(source, tasks, tuple(constraints), mds)
 
@@ -192,7 +193,9 @@ def _from_xml(data: bytes, source: str) -> DecompositionOutput:
         ends = _texts(c.find("task_instances"))
         if len(ends) != 2:
             raise MissionError(Problem(located(source, c.sourceline), "a constraint needs two task instances"))
-        constraints.append(OutputConstraint((c.findtext("type") or "").strip(), ends[0], ends[1],
-                                            f"line {c.sourceline}"))
+        kind = (c.findtext("type") or "").strip()
+        if kind == "EC" and c.find("group") is None and c.find("divisible") is None:
+            kind = "FB"  # a fallback constraint, as in the JSON form
+        constraints.append(OutputConstraint(kind, ends[0], ends[1], f"line {c.sourceline}"))
     mds = tuple(tuple(_texts(d.find("tasks"))) for d in root.findall("mission_decompositions/*"))
     return DecompositionOutput(source, tasks, tuple(constraints), mds)

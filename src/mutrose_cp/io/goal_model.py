@@ -30,6 +30,7 @@ from .expressions import (
     parse_select,
 )
 from .knowledge import hinted, json_depth_problem, json_syntax_problem
+from .text import decode_utf8
 
 
 @dataclass(frozen=True)
@@ -171,14 +172,12 @@ def load_goal_model(path: str | os.PathLike[str]) -> GoalModel:
     """
     source = os.fspath(path)
     try:
-        text = Path(source).read_text(encoding="utf-8-sig")
+        data = Path(source).read_bytes()
     except FileNotFoundError:
         raise MissionError("goal model file not found", source) from None
-    except UnicodeDecodeError as err:
-        raise MissionError(f"goal model is not UTF-8 text (byte {err.start})", source) from None
     except OSError as err:
         raise MissionError(f"cannot read goal model: {err.strerror or err}", source) from None
-    return parse_goal_model(text, source)
+    return parse_goal_model(decode_utf8(data, source, "goal model"), source)
 
 
 def parse_goal_model(text: str, source: str) -> GoalModel:

@@ -17,6 +17,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from ..errors import MissionError, Problem, located
+from .text import decode_utf8
 
 # ---------------------------------------------------------------------------------------------
 # Model
@@ -201,12 +202,11 @@ def load_domain(path: str | os.PathLike[str]) -> Domain:
     """Read and parse the HDDL domain file at ``path``; locations in errors use ``path`` as given."""
     source = os.fspath(path)
     try:
-        with open(source, encoding="utf-8") as handle:
-            text = handle.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        raise MissionError(Problem(located(source), f"cannot read the HDDL domain: {reason}")) from exc
-    return parse_domain(text, source)
+        with open(source, "rb") as handle:
+            data = handle.read()
+    except OSError as exc:
+        raise MissionError(Problem(located(source), f"cannot read the HDDL domain: {exc.strerror or exc}")) from None
+    return parse_domain(decode_utf8(data, source, "HDDL domain"), source)
 
 
 def parse_domain(text: str, source: str) -> Domain:
