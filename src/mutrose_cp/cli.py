@@ -120,6 +120,20 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return 0 if report.valid else 1
 
 
+MAX_COST = 10**12  # per action or method: sums over large missions stay far inside 64 bits
+
+
+def _cost(value: object, where: str) -> int:
+    """A cost from the cost file: a whole number (``3`` or ``3.0``), at most ``MAX_COST``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise MissionError(f"expected a whole number as cost, got {json.dumps(value)}", where)
+    if not abs(value) <= MAX_COST:  # also infinity (JSON 1e309) and NaN
+        raise MissionError(f"cost {value!r} is out of range: costs go from -{MAX_COST} to {MAX_COST}", where)
+    if isinstance(value, float) and not value.is_integer():
+        raise MissionError(f"expected a whole number as cost, got {value!r}", where)
+    return int(value)
+
+
 def _costs(mission: Mission, path: str | None) -> dict[int, int]:
     """Cost of each decomposition vertex: its number of actions, or the sum of per-action and
     per-method costs from a JSON cost file ``{"actions": {name: cost}, "methods": {name: cost},
@@ -130,20 +144,19 @@ def _costs(mission: Mission, path: str | None) -> dict[int, int]:
     methods: dict[str, int] = {}
     default = 1
     if path:
+        from .io.knowledge import read_bytes
+        from .io.text import decode_utf8
+
+        text = decode_utf8(read_bytes(path, "cost"), path, "cost file")
         try:
-            data = json.loads(Path(path).read_text(encoding="utf-8"))
-        except OSError as err:
-            raise MissionError(f"cannot read cost file: {err.strerror}", path) from None
+            data = json.loads(text)
         except json.JSONDecodeError as err:
             raise MissionError(f"invalid JSON: {err.msg}", f"{path}:{err.lineno}:{err.colno}") from None
-        if not isinstance(data, dict):
-            raise MissionError('expected an object {"actions": {...}, "methods": {...}}', path)
-        try:
-            actions = {str(k): int(v) for k, v in (data.get("actions") or {}).items()}
-            methods = {str(k): int(v) for k, v in (data.get("methods") or {}).items()}
-            default = int(data.get("default_action", 1))
-        except (TypeError, ValueError, AttributeError):
-            raise MissionError("costs must be integers: actions/methods map names to integers", path) from None
+        if not isinstance(data, dict) or not all(isinstance(data.get(k, {}), dict) for k in ("actions", "methods")):
+            raise MissionError('expected an object {"actions": {name: cost}, "methods": {name: cost}}', path)
+        actions = {str(k): _cost(v, f"{path}: actions.{k}") for k, v in data.get("actions", {}).items()}
+        methods = {str(k): _cost(v, f"{path}: methods.{k}") for k, v in data.get("methods", {}).items()}
+        default = _cost(data.get("default_action", 1), f"{path}: default_action")
 
     def method_cost(node: TreeNode) -> int:
         own = methods.get(node.name, 0) if node.kind == "method" else 0
@@ -187,7 +200,7 @@ def _decompositions(args: argparse.Namespace, mission: Mission, progress) -> tup
         chosen, cost = best if best is not None else minimize(mission.encoding(), costs)
         section["optimum"] = {"cost": str(cost), "decomposition": [key[d] for d in sorted(chosen)]}
         return [sorted(chosen)], total, section, f", optimum cost {cost}"
-    if args.sample:
+    if args.sample is not None:
         return space.sample(args.sample, args.seed), total, section, f", {args.sample} sampled (seed {args.seed})"
     limit = None if args.limit == 0 else args.limit
     listed = min(total, limit) if limit is not None else total
@@ -205,12 +218,12 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     hddl, gm, cfg, folder = _inputs(args)
     start = time.perf_counter()
     if args.algorithm == "exploratory":
-        used = [o for o, v in (("--optimize", args.optimize), ("--sample", args.sample), ("--explain", args.explain),
+        used = [o for o, v in (("--optimize", args.optimize), ("--sample", args.sample is not None), ("--explain", args.explain),
                                 ("--limit", args.limit != 1000)) if v]
         if used:
             raise MissionError(f"{', '.join(used)} {'needs' if len(used) == 1 else 'need'} the CP-SAT decomposer "
                                "(the default): drop --algorithm exploratory")
-    if args.sample and (args.optimize or args.limit != 1000):
+    if args.sample is not None and (args.optimize or args.limit != 1000):
         raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
     mission = Mission.load(hddl, gm, cfg)
     mission.progress = _Progress(not args.quiet).stage
@@ -309,6 +322,23 @@ def cmd_count(args: argparse.Namespace) -> int:
     return 3 if total == 0 and mission.task_graph.tasks() else 0
 
 
+MAX_COUNT = 2**62  # beyond any listing that fits on a disk; CP-SAT's limits are 64-bit
+
+
+def _count_option(minimum: int):
+    """An argparse type: an integer from ``minimum`` to ``MAX_COUNT`` (a usage error, exit 2,
+    otherwise)."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if not minimum <= value <= MAX_COUNT:
+            raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {MAX_COUNT}")
+        return value
+    return parse
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mutrose-cp",
@@ -334,10 +364,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--format", choices=("json", "xml"), help="output format (default: the configuration's)")
     p.add_argument("--algorithm", choices=("cpsat", "exploratory"), default="cpsat",
                    help="cpsat (default): solver-backed, factored; exploratory: the original's explicit combination")
-    p.add_argument("--limit", type=int, default=1000, metavar="K",
+    p.add_argument("--limit", type=_count_option(0), default=1000, metavar="K",
                    help="cpsat: list the first K mission decompositions (0 = all; default 1000)")
-    p.add_argument("--sample", type=int, metavar="K", help="cpsat: list K decompositions drawn uniformly at random")
-    p.add_argument("--seed", type=int, default=0, help="random seed for --sample (default 0)")
+    p.add_argument("--sample", type=_count_option(1), metavar="K", help="cpsat: list K decompositions drawn uniformly at random")
+    p.add_argument("--seed", type=_count_option(0), default=0, help="random seed for --sample (default 0)")
     p.add_argument("--optimize", action="store_true",
                    help="cpsat: output the decomposition of least cost (fewest actions, or --costs)")
     p.add_argument("--costs", metavar="FILE", help='JSON cost file {"actions": {...}, "methods": {...}}')

@@ -258,12 +258,16 @@ def parse_robot_number(value: str) -> RobotNumber:
     """
     if (m := _ROBOTS_RANGE.fullmatch(value)) is not None:
         low, high = int(m[1]), int(m[2])
+        if high == 0:
+            raise ValueError(f"Invalid declaration of robot number: {value} (a task needs at least one robot)")
         if low > high:
             raise ValueError(
                 f"Invalid declaration of robot number: {value} (lower bound greater than upper bound)"
             )
         return RobotNumber(low, high, fixed=False)
     if _ROBOTS_FIXED.fullmatch(value) is not None:
+        if int(value) == 0:
+            raise ValueError(f"Invalid declaration of robot number: {value} (a task needs at least one robot)")
         return RobotNumber(int(value), int(value), fixed=True)
     raise ValueError(f"Invalid declaration of robot number: {value}")
 
