@@ -17,6 +17,7 @@ from typing import Sequence
 
 from . import __version__
 from .errors import MissionError, NoDecompositionError
+from .interrupt import Interrupted, phase, signal_handlers
 from .mission import Mission, find_mission_files
 from .output import SplitListing
 
@@ -230,9 +231,11 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     _warn(args, mission)
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
     progress = _Progress(not args.quiet, f"mission decompositions: {label}")
-    tg = mission.task_graph
-    constraints = mission.constraints
-    decompositions, total, section, note = _decompositions(args, mission, progress)
+    with phase("expanding the mission"):
+        tg = mission.task_graph
+        constraints = mission.constraints
+    with phase("solving"):
+        decompositions, total, section, note = _decompositions(args, mission, progress)
     if args.output:
         out_path = Path(args.output)
     elif folder is not None and not Path(mission.config.output.file_path).is_absolute():
@@ -256,10 +259,12 @@ def cmd_decompose(args: argparse.Namespace) -> int:
                 print(f"\nwarning: more than {IHTN_WARNING} iHTN files: one is written per ordering of each "
                       "valid decomposition; --optimize or --limit K writes fewer", file=sys.stderr)
 
-        n_files = write_ihtns(model, Path(args.ihtn), on_file)
+        with phase("exporting iHTNs"):
+            n_files = write_ihtns(model, Path(args.ihtn), on_file)
     else:
         n_files = 0
-        write_output(model, out_path, file_type)
+        with phase("writing the output"):
+            write_output(model, out_path, file_type)
     elapsed = time.perf_counter() - start
     kinds = Counter(c.kind for c in constraints)
     data = {
@@ -309,8 +314,11 @@ def cmd_count(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg)
     _warn(args, mission)
-    space = mission.decomposition_space(_Progress(not args.quiet, "components solved"), keep=False)
-    total = space.count
+    with phase("expanding the mission"):
+        _ = mission.constraints
+    with phase("solving"):
+        space = mission.decomposition_space(_Progress(not args.quiet, "components solved"), keep=False)
+        total = space.count
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "count", "mission_decompositions": str(total), "components": len(space.components),
                     "seconds": round(elapsed, 3)},
@@ -420,17 +428,23 @@ def _main(argv: Sequence[str] | None) -> int:
     if not getattr(args, "command", None):
         parser.print_help(sys.stderr)
         return 2
+    if args.command in ("decompose", "count"):
+        # load the solver before signals become exceptions: an exception raised inside a native
+        # module's initialisation aborts the process
+        import mutrose_cp.solve.cpsat  # noqa: F401
     try:
-        return args.func(args)
+        with signal_handlers():
+            return args.func(args)
+    except Interrupted as stop:
+        print(f"interrupted{' while ' + stop.during if stop.during else ''} ({stop}): no output was written",
+              file=sys.stderr)
+        return stop.exit_code
     except MissionError as err:
         for problem in err.problems:
             print(f"error: {problem}", file=sys.stderr)
         if len(err.problems) > 1:
             print(f"{len(err.problems)} problems found", file=sys.stderr)
         return err.exit_code
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
     except RecursionError:
         print("error: the mission is nested too deeply to process", file=sys.stderr)
         return 2

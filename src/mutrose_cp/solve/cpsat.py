@@ -21,6 +21,7 @@ from ortools.sat.python import cp_model
 
 from ..errors import MissionError, NoDecompositionError
 from .encoding import FALSE, TRUE, BoolModel, Encoding, Lit, Record
+from .run import run_solver
 
 ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
 
@@ -210,13 +211,10 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
     for r in comp.records:
         builder.post(r)
     variables = [builder.var(v) for v in comp.choice_vars]
-    solver = cp_model.CpSolver()
-    solver.parameters.enumerate_all_solutions = True
-    solver.parameters.num_workers = 1
     collector = _Collector(variables, comp.choice_vars, keep)
-    status = solver.Solve(builder.model, collector)
-    if status not in (cp_model.OPTIMAL, cp_model.FEASIBLE, cp_model.INFEASIBLE):
-        raise RuntimeError(f"CP-SAT could not finish a component: {solver.StatusName(status)}")
+    # an enumeration is complete only with OPTIMAL (every solution seen) or INFEASIBLE (none)
+    run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.INFEASIBLE), callback=collector,
+               enumerate_all=True, what="enumerating a component")
     comp.count = collector.count
     # a canonical order (by decomposition literal), independent of the solver's search
     comp.solutions = sorted(collector.solutions, key=sorted) if collector.keep else None
@@ -418,10 +416,9 @@ def minimize(enc: Encoding, costs: Mapping[int, int]) -> tuple[list[int], int]:
             builder.post(r)
         if comp.choice_vars:
             builder.model.Minimize(sum(costs.get(var_to_dec[v], 0) * builder.var(v) for v in comp.choice_vars))
-        solver = cp_model.CpSolver()
-        solver.parameters.num_workers = 1
-        status = solver.Solve(builder.model)
-        if status not in (cp_model.OPTIMAL,):
+        solver, status = run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.INFEASIBLE),
+                                    what="optimising a component")
+        if status == cp_model.INFEASIBLE:
             raise NoDecompositionError("no valid mission decomposition exists")
         picked = [var_to_dec[v] for v in comp.choice_vars if solver.BooleanValue(builder.var(v))]
         chosen += picked
@@ -443,9 +440,8 @@ def explain(enc: Encoding) -> list[str]:
             else:
                 builder.post(r)
         builder.model.AddAssumptions([builder.model.GetBoolVarFromProtoIndex(i) for i in assumptions])
-        solver = cp_model.CpSolver()
-        solver.parameters.num_workers = 1
-        status = solver.Solve(builder.model)
+        solver, status = run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.FEASIBLE, cp_model.INFEASIBLE),
+                                    what="explaining a component")
         if status == cp_model.INFEASIBLE:
             core = solver.SufficientAssumptionsForInfeasibility()
             labels = sorted({assumptions[i] for i in core if i in assumptions})

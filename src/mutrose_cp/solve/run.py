@@ -1,0 +1,59 @@
+"""Running CP-SAT to completion, or not at all.
+
+A result is only ever taken from a solve that finished: a status is accepted only where it
+proves the search complete (all solutions enumerated, an optimum proven, or infeasibility).
+Anything else, a time or memory limit or a stop, raises :class:`IncompleteSolveError`.
+
+The solve runs in a worker thread while the main thread waits in short slices, so a signal is
+handled at once (:mod:`mutrose_cp.interrupt`): the solver is asked to stop, the worker is joined,
+and the interrupt propagates.  CP-SAT's own SIGINT handler is switched off: it would end the
+search early and report the partial enumeration as a normal status.
+"""
+from __future__ import annotations
+
+import threading
+from typing import Iterable
+
+from ortools.sat.python import cp_model
+
+from ..errors import MissionError
+
+
+class IncompleteSolveError(MissionError):
+    """CP-SAT stopped before it finished; no result is reported (exit status 4)."""
+
+    exit_code = 4
+
+
+def run_solver(model: cp_model.CpModel, *, accept: Iterable[int], callback: cp_model.CpSolverSolutionCallback | None = None,
+               enumerate_all: bool = False, what: str = "a component") -> tuple[cp_model.CpSolver, int]:
+    """Solve ``model`` with one worker; returns the solver and a status from ``accept``."""
+    solver = cp_model.CpSolver()
+    solver.parameters.num_workers = 1
+    solver.parameters.catch_sigint_signal = False
+    if enumerate_all:
+        solver.parameters.enumerate_all_solutions = True
+    result: dict[str, object] = {}
+
+    def work() -> None:
+        try:
+            result["status"] = solver.Solve(model, callback) if callback is not None else solver.Solve(model)
+        except BaseException as exc:  # noqa: BLE001 - handed to the main thread
+            result["error"] = exc
+
+    worker = threading.Thread(target=work, name="cp-sat", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+    except BaseException:
+        solver.StopSearch()
+        worker.join()
+        raise
+    if "error" in result:
+        raise result["error"]  # type: ignore[misc]
+    status = int(result["status"])  # type: ignore[call-overload]
+    if status not in set(accept):
+        raise IncompleteSolveError(f"CP-SAT did not finish {what} ({solver.StatusName(status)}): no result is "
+                                   "reported from an unfinished search")
+    return solver, status

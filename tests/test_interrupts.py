@@ -1,0 +1,90 @@
+"""Interrupts (SIGINT, SIGTERM) in every long phase of a command: the process ends with
+128 + the signal number and says "interrupted while <phase>", never reports a result from an
+unfinished solve, leaves an existing output untouched and no temporary file behind.
+
+The signal is sent by the process itself when the phase named in ``$MUTROSE_CP_FAULT`` starts
+(after a delay, so that a solve is under way): the same path as a Ctrl-C or a ``kill``.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from mutrose_cp.interrupt import FAULT_ENV, Interrupted
+from mutrose_cp.output import atomic_writer
+
+from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
+
+EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
+SENTINEL = "previous output, must survive\n"
+
+
+def _coupled_mission(folder: Path) -> Path:
+    """20 parallel tasks that each switch a light on, off or leave it: one component of about
+    two million solutions, which takes CP-SAT many seconds to enumerate."""
+    acts = (Action("wait-here"), Action("switch-on", eff=(Lit("lit", "?rm"),)),
+            Action("switch-off", eff=(Lit("lit", "?rm", False),)))
+    toggle = Task("Toggle", (Method("m-on", (), ("switch-on",)), Method("m-off", (), ("switch-off",)),
+                             Method("m-wait", (), ("wait-here",))))
+    tree = GoalNode(tuple(TaskNode("Toggle") for _ in range(20)), annotation=("flat", "#"))
+    MissionSpec(("lit",), ("charged",), acts, (toggle,), (Room("Room1", True, (("lit", None),), 0),), True, "",
+                tree).write(folder)
+    return folder
+
+
+def _run(args: list[str], fault: str, cwd: Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, FAULT_ENV: fault}
+    return subprocess.run([sys.executable, "-m", "mutrose_cp", *args], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=300)
+
+
+def _leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.rglob(".*.tmp"))
+
+
+@pytest.mark.parametrize("sig", ["INT", "TERM"])
+@pytest.mark.parametrize("phase,command,delay", [
+    ("expanding the mission", "decompose", 0),
+    ("solving", "decompose", 0.3),
+    ("solving", "count", 0.3),
+    ("writing the output", "decompose", 0),
+])
+def test_interrupted_phase_writes_nothing(tmp_path, sig, phase, command, delay):
+    mission = _coupled_mission(tmp_path / "mission") if phase == "solving" else EXAMPLE
+    out = tmp_path / "out" / "decomposition.json"
+    out.parent.mkdir()
+    out.write_text(SENTINEL)
+    args = [command, str(mission)] + (["-o", str(out)] if command == "decompose" else [])
+    result = _run(args, f"{phase}:{sig}:{delay}", tmp_path)
+    assert result.returncode == 128 + signal.Signals["SIG" + sig], result.stderr
+    assert f"interrupted while {phase} (SIG{sig})" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert result.stdout == ""  # in particular no count
+    assert out.read_text() == SENTINEL
+    assert _leftovers(tmp_path) == []
+
+
+def test_interrupted_ihtn_export_leaves_no_file(tmp_path):
+    target = tmp_path / "ihtn"
+    result = _run(["decompose", str(EXAMPLE), "--ihtn", str(target)], "exporting iHTNs:INT", tmp_path)
+    assert result.returncode == 130, result.stderr
+    assert "interrupted while exporting iHTNs" in result.stderr
+    assert not target.exists() or not any(target.iterdir())
+
+
+def test_interrupt_inside_a_write_removes_the_temporary_file(tmp_path):
+    """A signal in the middle of writing (here raised from inside the block) leaves the old file
+    and no temporary file."""
+    out = tmp_path / "decomposition.json"
+    out.write_text(SENTINEL)
+    with pytest.raises(Interrupted):
+        with atomic_writer(out) as fh:
+            fh.write("{" * 100_000)
+            raise Interrupted(signal.SIGTERM, "writing the output")
+    assert out.read_text() == SENTINEL
+    assert _leftovers(tmp_path) == []
