@@ -9,6 +9,8 @@ import argparse
 import gc
 import itertools
 import json
+import os
+import signal
 import sys
 import time
 from collections import Counter
@@ -75,9 +77,14 @@ def _summary(args: argparse.Namespace, data: dict, line: str) -> None:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    hddl, gm, cfg, _folder = _inputs(args)
+    hddl, gm, cfg, folder = _inputs(args)
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg)
+    base = (folder if folder is not None else cfg.parent.parent).resolve()
+    written = (base / mission.config.output.file_path).resolve()
+    if base != written and base not in written.parents:
+        mission.warnings.append(f"{cfg}: output.file_path {mission.config.output.file_path} leaves the mission folder: "
+                                f"decompose would write {written}")
     # expanding the goal model against the world surfaces the run-time checks too
     exp = mission.expansion
     _ = mission.task_graph
@@ -224,6 +231,8 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         if used:
             raise MissionError(f"{', '.join(used)} {'needs' if len(used) == 1 else 'need'} the CP-SAT decomposer "
                                "(the default): drop --algorithm exploratory")
+    if args.output == "-" and args.json_summary:
+        raise MissionError("-o - writes the output to standard output: drop --json-summary, which prints there too")
     if args.sample is not None and (args.optimize or args.limit != 1000):
         raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
     mission = Mission.load(hddl, gm, cfg)
@@ -243,6 +252,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     else:
         out_path = mission.output_path()
     file_type = args.format or mission.config.output.file_type
+    _refuse_inputs_as_output(out_path if not args.ihtn else None, mission, (hddl, gm, cfg))
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
                         space=section)
     if args.ihtn:
@@ -307,6 +317,26 @@ def _warn(args: argparse.Namespace, mission: Mission) -> None:
     if not getattr(args, "quiet", False):
         for w in mission.warnings:
             print(f"warning: {w}", file=sys.stderr)
+
+
+def _refuse_inputs_as_output(out_path: Path | None, mission: Mission, inputs: tuple[Path, ...]) -> None:
+    """An output that is one of the mission's inputs (the same file, after links, by device and
+    inode) would destroy it: refuse before anything is computed or written."""
+    if out_path is None or str(out_path) == "-":
+        return
+    try:
+        target = os.stat(out_path)
+    except OSError:
+        return  # a new file cannot be an input
+    world = mission.world_path
+    for path in (*inputs, *([world] if world is not None else [])):
+        try:
+            st = os.stat(path)
+        except OSError:
+            continue
+        if (st.st_dev, st.st_ino) == (target.st_dev, target.st_ino):
+            raise MissionError(f"the output would overwrite the input {path}: choose another output file",
+                               str(out_path))
 
 
 def cmd_count(args: argparse.Namespace) -> int:
@@ -416,10 +446,26 @@ def main(argv: Sequence[str] | None = None) -> int:
             gc.enable()
 
 
+def _usable_stderr() -> None:
+    """Started with stderr closed, messages go nowhere rather than failing the command."""
+    try:
+        os.fstat(2)
+    except OSError:
+        sys.stderr = open(os.devnull, "w")  # noqa: SIM115 - lives as long as the process
+        return
+    if sys.stderr is None:
+        sys.stderr = open(os.devnull, "w")  # noqa: SIM115
+
+
 def _main(argv: Sequence[str] | None) -> int:
     # exact counts are big integers (3^10000 has 4772 digits, over Python's default limit for
     # converting an int to text)
     sys.set_int_max_str_digits(0)
+    _usable_stderr()
+    if hasattr(signal, "SIGXFSZ"):
+        # over a file-size limit, a write fails with EFBIG (a located error) instead of the
+        # signal killing the process
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -13,7 +13,8 @@ from typing import Iterator
 from .constraints import EC, FB, SEQ
 from .errors import MissionError
 from .htn import TreeNode
-from .output import OutputModel, atomic_writer, write_boost_json
+from .output import OutputModel, write_boost_json
+from .output_file import atomic_writer
 from .taskgraph import Decomposition
 
 

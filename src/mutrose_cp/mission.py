@@ -82,6 +82,7 @@ class Mission:
     knowledge: WorldKnowledge
     config_path: Path
     warnings: list[str] = field(default_factory=list)
+    world_path: Path | None = None  # the world knowledge file the configuration named
     # optional progress reporter for long stages: called with (stage, done, total)
     progress: Callable[[str, int, int], None] | None = None
 
@@ -106,7 +107,7 @@ class Mission:
         cfg: Configuration = loaded["config"]
         world_path = resolve_config_path(cfg.world_db.path, Path(config))
         knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id)
-        mission = cls(loaded["domain"], loaded["gm"], cfg, knowledge, Path(config))
+        mission = cls(loaded["domain"], loaded["gm"], cfg, knowledge, Path(config), world_path=world_path)
         mission.warnings.extend(cfg.warnings)
         mission.warnings.extend(mission.goal_model.warnings)
         mission.warnings.extend(str(p) for p in check_annotations(mission.goal_model))

@@ -9,42 +9,18 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
-from contextlib import contextmanager
 from dataclasses import dataclass
-from pathlib import Path as FsPath
 from typing import IO, Any, Iterable, Iterator, Mapping
 
 from .constraints import EC, SEQ, Constraint
 from .errors import MissionError
 from .io.config import Configuration
 from .io.hddl import Domain, Literal
+from .output_file import atomic_writer
 from .taskgraph import Decomposition, TaskGraph
 from .world import InitialState
 
 Tree = Any  # str | list[Tree] | dict[str, Tree]
-
-
-# ---------------------------------------------------------------------------------------------
-# Atomic files
-
-
-@contextmanager
-def atomic_writer(path: str | os.PathLike, mode: str = "w") -> Iterator[IO]:
-    """Write to a temporary file beside ``path`` and rename it into place on success."""
-    target = FsPath(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    try:
-        with os.fdopen(fd, mode, encoding=None if "b" in mode else "utf-8", newline="" if "b" not in mode else None) as fh:
-            yield fh
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
 
 
 # ---------------------------------------------------------------------------------------------
