@@ -28,7 +28,8 @@ def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
     """(hddl, gm, config, mission folder or None) from ``HDDL GM CONFIG`` or ``MISSION_DIR``."""
     files = args.inputs
     if len(files) == 1:
-        hddl, gm, cfg = find_mission_files(files[0], getattr(args, "config", None))
+        hddl, gm, cfg = find_mission_files(files[0], getattr(args, "config", None),
+                                           hddl_name=getattr(args, "hddl", None), gm_name=getattr(args, "gm", None))
         return hddl, gm, cfg, Path(files[0])
     if len(files) == 3:
         return Path(files[0]), Path(files[1]), Path(files[2]), None
@@ -69,7 +70,14 @@ def _big(n: int) -> str:
     return digits if len(digits) <= 15 else f"{digits[0]}.{digits[1:4]}e{len(digits) - 1} (exact: {len(digits)} digits)"
 
 
-def _summary(args: argparse.Namespace, data: dict, line: str) -> None:
+def _summary(args: argparse.Namespace, data: dict, line: str, mission: Mission | None = None) -> None:
+    """The closing line on stderr (unless ``-q``) and the JSON summary on stdout (with
+    ``--json-summary``); both name the four input files the command read."""
+    if mission is not None:
+        files = {"hddl": mission.domain.source, "gm": mission.goal_model.source,
+                 "configuration": str(mission.config_path), "world": str(mission.world_path or "")}
+        data = {**data, "inputs": files}
+        line += "\n  read: " + ", ".join(f"{k} {v}" for k, v in files.items())
     if getattr(args, "json_summary", False):
         print(json.dumps(data, sort_keys=True))
     if not getattr(args, "quiet", False):
@@ -94,7 +102,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     _summary(args, {"command": "check", "valid": True, "task_instances": len(exp.instances),
                     "seconds": round(elapsed, 3)},
              f"ok: {hddl.name}, {gm.name}, {cfg.name} are valid ({len(exp.instances)} task instances, "
-             f"{elapsed:.2f} s)")
+             f"{elapsed:.2f} s)", mission)
     return 0
 
 
@@ -124,7 +132,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
                     "notes": report.notes},
              f"{'valid' if report.valid else 'NOT valid'}: {report.checked - len(bad)} of {report.checked} mission "
              f"decompositions valid" + (f", {file_level} problems in the file" if file_level else "")
-             + f" ({hddl.name}, {gm.name}, {cfg.name}, {Path(output_path).name})")
+             + f" ({Path(output_path).name})", mission)
     return 0 if report.valid else 1
 
 
@@ -292,7 +300,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     _summary(args, data,
              f"decomposed: {data['task_instances']} task instances, {data['task_decompositions']} task "
              f"decompositions, constraints SEQ {kinds.get('SEQ', 0)} FB {kinds.get('FB', 0)} EC "
-             f"{kinds.get('EC', 0)}, {_big(total)} valid mission decompositions{note} -> {where} ({elapsed:.2f} s)")
+             f"{kinds.get('EC', 0)}, {_big(total)} valid mission decompositions{note} -> {where} ({elapsed:.2f} s)", mission)
     return 0
 
 
@@ -309,7 +317,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "graph", "view": args.view, "output": str(result.path), "rendered": result.rendered,
                     "seconds": round(elapsed, 3)},
-             f"graph: {args.view} view written to {result.path} ({elapsed:.2f} s)")
+             f"graph: {args.view} view written to {result.path} ({elapsed:.2f} s)", mission)
     return 0
 
 
@@ -353,7 +361,7 @@ def cmd_count(args: argparse.Namespace) -> int:
     _summary(args, {"command": "count", "mission_decompositions": str(total), "components": len(space.components),
                     "seconds": round(elapsed, 3)},
              f"counted: {_big(total)} valid mission decompositions in {len(space.components)} independent components "
-             f"({elapsed:.2f} s)")
+             f"({elapsed:.2f} s)", mission)
     sys.stderr.flush()
     print(total)  # the bare count is the last line of stdout
     # like decompose: a mission whose tasks admit no valid combination is an error (status 3)
@@ -389,6 +397,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("inputs", nargs="+", metavar="INPUT",
                        help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
         p.add_argument("--config", help="in a mission folder with several configurations, the one to use")
+        p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
+        p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
         p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
         p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
 

@@ -25,6 +25,19 @@ from .taskgraph import TaskGraph, build_task_graph
 from .world import InitialState, build_initial_state
 
 
+def _world_ambiguity(relative: str, config_path: Path, read: Path) -> str:
+    """A warning when the world path names two different existing files, one from the current
+    directory and one from the mission folder."""
+    p = Path(relative)
+    if p.is_absolute():
+        return ""
+    here, beside = Path.cwd() / p, config_path.parent.parent / p
+    if not (here.is_file() and beside.is_file()) or here.samefile(beside):
+        return ""
+    return (f"{config_path}: world_db.path {relative} names two files, {here} (from the current directory) and "
+            f"{beside} (from the mission folder); read {read}, as the original does")
+
+
 def resolve_config_path(relative: str, config_path: Path) -> Path:
     """Resolve a path from the configuration: the current directory first (as the original
     does), then the mission folder (the configuration's parent's parent), then its folder."""
@@ -38,12 +51,32 @@ def resolve_config_path(relative: str, config_path: Path) -> Path:
     return candidates[1] if (config_path.parent.parent / p).parent.exists() else candidates[0]
 
 
-def find_mission_files(folder: str | os.PathLike, config_name: str | None = None) -> tuple[Path, Path, Path]:
+def _pick(candidates: list[Path], chosen: str | None, what: str, option: str, folder: Path) -> Path:
+    """The one candidate file of a mission sub-folder; several without ``option`` is an error
+    (a stale copy beside the real file must never be read silently)."""
+    if chosen:
+        as_path = Path(chosen)
+        if as_path.is_file():
+            return as_path
+        named = [c for c in candidates if c.name == chosen or c.stem == chosen]
+        if not named:
+            raise MissionError(f"no {what} named {chosen!r}; available: " + ", ".join(c.name for c in candidates),
+                               str(folder))
+        return named[0]
+    if len(candidates) > 1:
+        raise MissionError(f"several {what} files: " + ", ".join(c.name for c in candidates)
+                           + f"; choose one with {option}", str(folder))
+    return candidates[0]
+
+
+def find_mission_files(folder: str | os.PathLike, config_name: str | None = None, *, hddl_name: str | None = None,
+                       gm_name: str | None = None) -> tuple[Path, Path, Path]:
     """The HDDL, goal model and configuration of a mission folder (``hddl/ gm/ configuration/``).
 
     With several configurations, ``config_name`` picks one (file name or its distinguishing
     suffix, e.g. ``Delivery`` for ``configurationDelivery.json``); the goal model whose name
-    contains that suffix is chosen."""
+    contains that suffix is chosen.  Several HDDL files, or several goal models that the
+    configuration does not tell apart, are an error unless ``hddl_name``/``gm_name`` choose."""
     root = Path(folder)
     if not root.is_dir():
         raise MissionError(f"cannot read mission folder: {root} is not a directory", str(root))
@@ -51,7 +84,7 @@ def find_mission_files(folder: str | os.PathLike, config_name: str | None = None
     gms = sorted(p for p in (root / "gm").glob("*") if p.is_file())
     configs = sorted(p for p in (root / "configuration").glob("*") if p.suffix.lower() in (".json", ".xml"))
     missing = [n for n, lst in (("hddl/*.hddl", hddls), ("gm/*", gms), ("configuration/*.json|xml", configs)) if not lst]
-    if missing:
+    if missing and not (hddl_name and gm_name and configs):
         raise MissionError(f"mission folder has no {', '.join(missing)} (expected hddl/ gm/ configuration/ knowledge/)",
                            str(root))
     if config_name:
@@ -67,9 +100,11 @@ def find_mission_files(folder: str | os.PathLike, config_name: str | None = None
             raise MissionError("several configurations; choose one with --config: "
                                + ", ".join(c.name for c in configs), str(root / "configuration"))
         config = (jsons or configs)[0]
+    hddl = _pick(hddls, hddl_name, "HDDL domain", "--hddl", root / "hddl")
     suffix = config.stem.removeprefix("configuration")
-    gm = next((g for g in gms if suffix and suffix in g.stem), gms[0])
-    return hddls[0], gm, config
+    matching = [g for g in gms if suffix and suffix in g.stem]
+    gm = _pick(gms if gm_name else (matching or gms), gm_name, "goal model", "--gm", root / "gm")
+    return hddl, gm, config
 
 
 @dataclass
@@ -106,9 +141,12 @@ class Mission:
             raise MissionError(problems)
         cfg: Configuration = loaded["config"]
         world_path = resolve_config_path(cfg.world_db.path, Path(config))
+        ambiguity = _world_ambiguity(cfg.world_db.path, Path(config), world_path)
         knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id)
         mission = cls(loaded["domain"], loaded["gm"], cfg, knowledge, Path(config), world_path=world_path)
         mission.warnings.extend(cfg.warnings)
+        if ambiguity:
+            mission.warnings.append(ambiguity)
         mission.warnings.extend(mission.goal_model.warnings)
         mission.warnings.extend(str(p) for p in check_annotations(mission.goal_model))
         cross = cross_check(mission.domain, mission.goal_model, cfg)
