@@ -7,6 +7,12 @@ execution-constrained partners.
 """
 from __future__ import annotations
 
+import fcntl
+import os
+import re
+import shutil
+import signal
+import tempfile
 from pathlib import Path
 from typing import Iterator
 
@@ -14,7 +20,6 @@ from .constraints import EC, FB, SEQ
 from .errors import MissionError
 from .htn import TreeNode
 from .output import OutputModel, write_boost_json
-from .output_file import atomic_writer
 from .taskgraph import Decomposition
 
 
@@ -152,12 +157,11 @@ def _tree_json(nodes: dict[str, dict], node: TreeNode, parent: str, d: int, agen
     return key
 
 
-IHTN_WARNING = 10_000
+IHTN_MAX = 10_000  # default limit on the number of files one export may write
+IHTN_FILE = re.compile(r"ihtn_[0-9]+\.json")  # the only files an export ever replaces or removes
 
 
-def write_ihtns(model: OutputModel, folder: Path, progress=None) -> int:
-    """Write ``ihtn_<n>.json`` files into ``folder`` (old ``ihtn_*.json`` there are removed)."""
-    tg = model.tg
+def _constraint_index(model: OutputModel) -> tuple[dict[int, set[int]], dict[int, set[int]]]:
     succ: dict[int, set[int]] = {}
     ec: dict[int, set[int]] = {}
     for c in model.constraints:
@@ -166,29 +170,111 @@ def write_ihtns(model: OutputModel, folder: Path, progress=None) -> int:
         elif c.kind == EC:
             ec.setdefault(c.first, set()).add(c.second)
             ec.setdefault(c.second, set()).add(c.first)
-    folder.mkdir(parents=True, exist_ok=True)
-    for old in folder.glob("ihtn_*.json"):
-        old.unlink()
-    count = 0
+    return succ, ec
+
+
+class CountTooCostly(Exception):
+    """Counting the orderings exactly would take more than the allowed work."""
+
+
+def count_orderings(members: list[int], succ: dict[int, set[int]], cap: int, budget: int | None = None) -> int:
+    """How many total orders of ``members`` respect ``succ`` (the iHTN files of one mission
+    decomposition), counted over the sets of tasks already placed; stops at ``cap``.  With a
+    ``budget``, more sets than that raise :class:`CountTooCostly`."""
+    index = {m: i for i, m in enumerate(members)}
+    after = [sum(1 << index[t] for t in succ.get(m, ()) if t in index) for m in members]
+    full = (1 << len(members)) - 1
+    memo: dict[int, int] = {full: 1}
+
+    def count(placed: int) -> int:
+        if placed in memo:
+            return memo[placed]
+        if budget is not None and len(memo) > budget:
+            raise CountTooCostly
+        total = 0
+        for i in range(len(members)):
+            if not placed >> i & 1 and not after[i] & placed:
+                total += count(placed | 1 << i)
+                if total >= cap:
+                    break
+        memo[placed] = total = min(total, cap)
+        return total
+
+    return count(0)
+
+
+def ihtn_file_count(model: OutputModel, one_per_decomposition: bool, cap: int, budget: int | None = None) -> int:
+    """The number of files an export writes (at most ``cap``, which means "at least ``cap``");
+    with a ``budget`` of counting work per decomposition, :class:`CountTooCostly` beyond it."""
+    if one_per_decomposition:
+        return min(len(model.decompositions), cap)
+    succ, _ = _constraint_index(model)
+    total = 0
     for md in model.decompositions:
-        agents = _Agents(model, list(md), ec)
-        member_set = set(md)
-        local = {d: succ.get(d, set()) & member_set for d in md}
-        for order in _orderings(list(md), local):
-            count += 1
-            nodes: dict[str, dict] = {}
-            root = {"name": "ROOT", "type": "task", "parent": "-1", "agents": agents.show(agents.all), "children": ["1"]}
-            nodes["0"] = root
-            rm = {"name": "ROOT_M", "type": "method", "parent": "0", "agents": agents.show(agents.all), "children": []}
-            nodes["1"] = rm
-            for d in order:
-                dec = tg.vertices[d].decomposition
-                loc = dec.instance.location
-                location = set(loc) if isinstance(loc, tuple) else ({loc} if loc else set())
-                rm["children"].append(_tree_json(nodes, dec.path.tree, "1", d, agents, location))
-            with atomic_writer(folder / f"ihtn_{count}.json") as fh:
-                write_boost_json(nodes, fh)
-                fh.write("\n")
-            if progress is not None:
-                progress(count)
+        members = set(md)
+        total += count_orderings(list(md), {d: succ.get(d, set()) & members for d in md}, cap - total, budget)
+        if total >= cap:
+            return cap
+    return total
+
+
+def write_ihtns(model: OutputModel, folder: Path, progress=None, *, one_per_decomposition: bool = False) -> int:
+    """Write ``ihtn_<n>.json`` files into ``folder``, all or nothing.
+
+    The files are built in a temporary folder beside ``folder`` and then moved in under a lock,
+    with SIGINT and SIGTERM held back for those few renames; old ``ihtn_<n>.json`` files that
+    the new export does not replace are removed.  No other file of ``folder`` is touched, and
+    two concurrent exports leave the whole result of one of them."""
+    tg = model.tg
+    succ, ec = _constraint_index(model)
+    folder.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=folder.parent))
+    try:
+        count = 0
+        for md in model.decompositions:
+            agents = _Agents(model, list(md), ec)
+            member_set = set(md)
+            local = {d: succ.get(d, set()) & member_set for d in md}
+            for order in _orderings(list(md), local):
+                count += 1
+                nodes: dict[str, dict] = {}
+                root = {"name": "ROOT", "type": "task", "parent": "-1", "agents": agents.show(agents.all),
+                        "children": ["1"]}
+                nodes["0"] = root
+                rm = {"name": "ROOT_M", "type": "method", "parent": "0", "agents": agents.show(agents.all),
+                      "children": []}
+                nodes["1"] = rm
+                for d in order:
+                    dec = tg.vertices[d].decomposition
+                    loc = dec.instance.location
+                    location = set(loc) if isinstance(loc, tuple) else ({loc} if loc else set())
+                    rm["children"].append(_tree_json(nodes, dec.path.tree, "1", d, agents, location))
+                with open(staging / f"ihtn_{count}.json", "w", encoding="utf-8", newline="") as fh:
+                    write_boost_json(nodes, fh)
+                    fh.write("\n")
+                if progress is not None:
+                    progress(count)
+                if one_per_decomposition:
+                    break
+        _swap_in(staging, folder, count)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
     return count
+
+
+def _swap_in(staging: Path, folder: Path, count: int) -> None:
+    """Move the staged files into ``folder`` and drop its other ``ihtn_<n>.json`` files."""
+    lock = os.open(folder, os.O_RDONLY)  # the folder itself is the lock: nothing is left behind
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+        try:
+            for n in range(1, count + 1):
+                os.replace(staging / f"ihtn_{n}.json", folder / f"ihtn_{n}.json")
+            for old in folder.iterdir():
+                if IHTN_FILE.fullmatch(old.name) and int(old.name[5:-5]) > count:
+                    old.unlink()
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)
+    finally:
+        os.close(lock)  # releases the lock
