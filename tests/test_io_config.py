@@ -50,7 +50,10 @@ def test_every_reference_configuration_loads(rel: str) -> None:
     assert config.world_db.unique_id == "name"
     assert config.output.file_type in ("json", "xml")
     assert config.type_mapping  # every mission maps at least one type
-    assert config.warnings == ()
+    # the shipped XML configurations close <location_types> with </location_type> (and one
+    # more such typo): harmless repairs, each a located warning
+    assert all(": configuration: </" in w and "; read as </" in w for w in config.warnings)
+    assert bool(config.warnings) == rel.endswith(".xml")
     for m in config.semantic_mapping:
         assert m.type in ("attribute", "ownership", "relationship")
         assert m.mapped_type in ("predicate", "function")
@@ -63,7 +66,7 @@ def test_xml_and_json_forms_are_equal_except_source_and_output(mission: str) -> 
     from_json = load_configuration(folder / "configuration.json")
     from_xml = load_configuration(folder / "configuration.xml")
     assert from_xml.source.endswith("configuration.xml")
-    strip = dict(source="", output=None)
+    strip = dict(source="", output=None, warnings=())  # only the XML has repaired end tags
     assert dataclasses.replace(from_json, **strip) == dataclasses.replace(from_xml, **strip)
 
 

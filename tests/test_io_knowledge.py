@@ -52,7 +52,8 @@ def _write(tmp_path: Path, text: str, name: str = "world.xml") -> Path:
 
 @pytest.mark.parametrize("rel", _knowledge_files())
 def test_every_reference_world_loads(rel: str) -> None:
-    k = load_knowledge(reference_dir() / rel, "world_db")
+    lenient = rel.endswith("food-logistics-delivery/knowledge/world_db5.xml")  # see below
+    k = load_knowledge(reference_dir() / rel, "world_db", lenient=lenient)
     assert k.root.tag == "world_db"
     assert k.records
     for r in k.records:
@@ -77,10 +78,17 @@ def test_vital_signs_lists() -> None:
     assert split_list(k.field_text(room, "patients")) == ["Patient1", "Patient2"]
 
 
-def test_scalability_world_with_unclosed_record_is_read_leniently() -> None:
+def test_scalability_world_with_unclosed_record_needs_lenient_xml() -> None:
     # <Location> Location12 is never closed: the </world_db> end tag closes it (innermost open
-    # element), the rest of the document becomes its content
-    k = load_knowledge(reference_dir() / "scalability/food-logistics-delivery/knowledge/world_db5.xml", "world_db")
+    # element), the rest of the document becomes its content.  That changes which records exist,
+    # so it is an error unless --lenient-xml asks for the original's reading (with a warning).
+    path = reference_dir() / "scalability/food-logistics-delivery/knowledge/world_db5.xml"
+    with pytest.raises(MissionError) as info:
+        load_knowledge(path, "world_db")
+    assert f"{path}:173:13: world knowledge: <Location> (line 106) is never closed" in str(info.value)
+    assert "--lenient-xml" in str(info.value)
+    k = load_knowledge(path, "world_db", lenient=True)
+    assert any("<Location> (line 106) is never closed" in w for w in k.warnings)
     last = k.records_of("Location")[-1]
     assert k.record_id(last) == "Location12"
     assert k.records_of("Patient") == ()
@@ -154,10 +162,40 @@ def test_mismatched_end_tags_close_the_innermost_element(tmp_path: Path) -> None
     assert k.field_text(k.records[0], "x") == "1"
 
 
-def test_only_the_first_top_level_element_is_read(tmp_path: Path) -> None:
+def test_content_after_the_root_needs_lenient_xml(tmp_path: Path) -> None:
     path = _write(tmp_path, "<world_db><Room><name>A</name></Room></world_db>\n<world_db><Room><name>B</name></Room></world_db>")
+    with pytest.raises(MissionError, match=r"world.xml:2:1: world knowledge: content after the end of the root "
+                                           r"element <world_db> is ignored"):
+        load_knowledge(path, "world_db")
+    k = load_knowledge(path, "world_db", lenient=True)
+    assert [k.record_id(r) for r in k.records] == ["A"]  # the original reads the first element only
+    assert len(k.warnings) == 1
+
+
+def test_a_stray_end_tag_needs_lenient_xml(tmp_path: Path) -> None:
+    """A stray </Room> closes the root early: the records after it would be lost."""
+    path = _write(tmp_path, "<world_db>\n<Room><name>A</name></Room></Room>\n<Room><name>B</name></Room>\n</world_db>")
+    with pytest.raises(MissionError, match=r"world.xml:2:35: world knowledge: </Room> closes the root element "
+                                           r"<world_db> early"):
+        load_knowledge(path, "world_db")
+
+
+def test_a_missing_end_tag_that_nests_records_needs_lenient_xml(tmp_path: Path) -> None:
+    path = _write(tmp_path, "<world_db>\n<Room><name>A</name>\n<Room><name>B</name></Room>\n"
+                            "<Room><name>C</name></Room>\n</world_db>")
+    with pytest.raises(MissionError, match=r"world.xml:5:12: world knowledge: <Room> \(line 2\) is never closed"):
+        load_knowledge(path, "world_db")
+    k = load_knowledge(path, "world_db", lenient=True)
+    assert [k.record_id(r) for r in k.records] == ["A"]  # B and C nest inside A, as in the original
+    assert "is never closed" in k.warnings[0]
+
+
+def test_a_tag_typo_is_a_warning(tmp_path: Path) -> None:
+    path = _write(tmp_path, "<world_db>\n<location_types><t>Room</t></location_type>\n<Room><name>A</name></Room>\n</world_db>")
     k = load_knowledge(path, "world_db")
-    assert [k.record_id(r) for r in k.records] == ["A"]
+    assert [k.record_id(r) for r in k.records_of("Room")] == ["A"]
+    assert k.warnings == (f"{path}:2:44: world knowledge: </location_type> closes <location_types> (line 2); "
+                          "read as </location_types>",)
 
 
 def test_xml_root_lookup(tmp_path: Path) -> None:
@@ -225,4 +263,4 @@ def test_base_type() -> None:
 
 def test_knowledge_is_a_value() -> None:
     k = WorldKnowledge.__dataclass_fields__
-    assert list(k) == ["source", "root", "unique_id"]
+    assert list(k) == ["source", "root", "unique_id", "warnings"]

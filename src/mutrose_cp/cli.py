@@ -87,7 +87,7 @@ def _summary(args: argparse.Namespace, data: dict, line: str, mission: Mission |
 def cmd_check(args: argparse.Namespace) -> int:
     hddl, gm, cfg, folder = _inputs(args)
     start = time.perf_counter()
-    mission = Mission.load(hddl, gm, cfg)
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     base = (folder if folder is not None else cfg.parent.parent).resolve()
     written = (base / mission.config.output.file_path).resolve()
     if base != written and base not in written.parents:
@@ -117,7 +117,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     *mission_inputs, output_path = args.inputs
     args.inputs = mission_inputs
     hddl, gm, cfg, _folder = _inputs(args)
-    mission = Mission.load(hddl, gm, cfg)
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     output = load_decomposition_output(output_path)
     report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state, output)
     for violation in report.violations:
@@ -243,7 +243,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         raise MissionError("-o - writes the output to standard output: drop --json-summary, which prints there too")
     if args.sample is not None and (args.optimize or args.limit != 1000):
         raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
-    mission = Mission.load(hddl, gm, cfg)
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     mission.progress = _Progress(not args.quiet).stage
     _warn(args, mission)
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
@@ -310,7 +310,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
 
     hddl, gm, cfg, _folder = _inputs(args)
     start = time.perf_counter()
-    mission = Mission.load(hddl, gm, cfg)
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     _warn(args, mission)
     result = render(view_dot(mission, args.view, args.index), args.output)
     if result.message:
@@ -372,7 +372,7 @@ def _refuse_inputs_as_output(out_path: Path | None, mission: Mission, inputs: tu
 def cmd_count(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = _inputs(args)
     start = time.perf_counter()
-    mission = Mission.load(hddl, gm, cfg)
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     _warn(args, mission)
     with phase("expanding the mission"):
         _ = mission.constraints
@@ -421,6 +421,9 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--config", help="in a mission folder with several configurations, the one to use")
         p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
         p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
+        p.add_argument("--lenient-xml", action="store_true",
+                       help="read XML whose repair changes which records exist or how they nest, as the original "
+                            "does (with warnings) instead of refusing it")
         p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
         p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
 

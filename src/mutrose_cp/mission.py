@@ -122,7 +122,8 @@ class Mission:
     progress: Callable[[str, int, int], None] | None = None
 
     @classmethod
-    def load(cls, hddl: str | os.PathLike, gm: str | os.PathLike, config: str | os.PathLike) -> "Mission":
+    def load(cls, hddl: str | os.PathLike, gm: str | os.PathLike, config: str | os.PathLike, *,
+             lenient_xml: bool = False) -> "Mission":
         """Read and validate the four inputs (the world file is named by the configuration).
 
         All problems of the three named files are collected before raising, so one run reports
@@ -131,8 +132,11 @@ class Mission:
 
         problems = []
         loaded = {}
+        def load_config(path: str | os.PathLike) -> Configuration:
+            return load_configuration(path, lenient=lenient_xml)
+
         for key, loader, path in (("domain", load_domain, hddl), ("gm", load_goal_model, gm),
-                                  ("config", load_configuration, config)):
+                                  ("config", load_config, config)):
             try:
                 loaded[key] = loader(path)
             except MissionError as err:
@@ -142,9 +146,10 @@ class Mission:
         cfg: Configuration = loaded["config"]
         world_path = resolve_config_path(cfg.world_db.path, Path(config))
         ambiguity = _world_ambiguity(cfg.world_db.path, Path(config), world_path)
-        knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id)
+        knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id, lenient=lenient_xml)
         mission = cls(loaded["domain"], loaded["gm"], cfg, knowledge, Path(config), world_path=world_path)
         mission.warnings.extend(cfg.warnings)
+        mission.warnings.extend(knowledge.warnings)
         if ambiguity:
             mission.warnings.append(ambiguity)
         mission.warnings.extend(mission.goal_model.warnings)

@@ -105,14 +105,14 @@ SEMANTIC_TYPES = ("attribute", "ownership", "relationship")
 MAPPED_TYPES = ("predicate", "function")
 
 
-def load_configuration(path: str | os.PathLike[str]) -> Configuration:
+def load_configuration(path: str | os.PathLike[str], *, lenient: bool = False) -> Configuration:
     """Read a configuration file; JSON if the extension (upper-cased) is ``JSON``, else XML."""
     source = os.fspath(path)
     data = read_bytes(path, "configuration")
     ext = source.rsplit(".", 1)[-1].upper() if "." in os.path.basename(source) else ""
     if ext == "JSON":
         return parse_configuration_json(decode_utf8(data, source, "configuration"), source)
-    return parse_configuration_xml(data, source)
+    return parse_configuration_xml(data, source, lenient=lenient)
 
 
 def parse_configuration_json(text: str, source: str) -> Configuration:
@@ -129,11 +129,11 @@ def parse_configuration_json(text: str, source: str) -> Configuration:
     return _Builder(source).build(data)
 
 
-def parse_configuration_xml(data: bytes | str, source: str) -> Configuration:
-    """Parse an XML configuration (root ``<configuration>``), tolerating the mismatched end
-    tags of the shipped files (``<location_types> ... </location_type>``)."""
-    root = parse_tolerant_xml(data, source, "configuration")
+def parse_configuration_xml(data: bytes | str, source: str, *, lenient: bool = False) -> Configuration:
+    """Parse an XML configuration (root ``<configuration>``), tolerating, with a warning, the
+    mismatched end tags of the shipped files (``<location_types> ... </location_type>``)."""
     builder = _Builder(source)
+    root = parse_tolerant_xml(data, source, "configuration", lenient=lenient, warnings=builder.warnings)
     if root.tag != "configuration":
         raise MissionError(Problem(
             located(source, root.sourceline),

@@ -121,13 +121,67 @@ _DTD_HINT = (
 _XML_DECL_ENCODING = re.compile(r"""^(\ufeff?\s*<\?xml[^>]*?encoding\s*=\s*)(["'])[^"']*\2""")
 
 
-def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Element:
+_MISMATCH = re.compile(r"Opening and ending tag mismatch: (\S+) line (\d+) and (\S+)")
+LENIENT_HINT = ("Fix the XML, or pass --lenient-xml to read it as the original does (which keeps the recovered "
+                "structure).")
+
+
+def _more_after(data: bytes, line: int, column: int) -> bool:
+    """Whether anything but blanks follows position ``line:column`` (1-based) of ``data``."""
+    lines = data.split(b"\n")
+    rest = b"\n".join([lines[line - 1][column - 1:], *lines[line:]]) if line <= len(lines) else b""
+    return bool(rest.strip())
+
+
+def _recoveries(parser: etree.XMLParser, root: etree._Element, data: bytes, source: str,
+                what: str) -> tuple[list[Problem], list[Problem]]:
+    """The repairs the reader made, as (harmless, structural) located messages.
+
+    An end tag that is a typo of the element it closes (``</location_type>`` for
+    ``<location_types>``) changes nothing, nor does a text-only element left open.  An element
+    with children left open (its end tag missing, so the end tag of an outer element closes it)
+    swallows the records after it, and content after the root element (often after a stray end
+    tag closed the root early) is dropped: both change which records exist or how they nest."""
+    harmless: list[Problem] = []
+    structural: list[Problem] = []
+    for e in parser.error_log:
+        where = located(source, e.line, e.column)
+        if e.type_name == "ERR_DOCUMENT_END":
+            structural.append(Problem(where, f"{what}: content after the end of the root element <{root.tag}> is "
+                                             "ignored (a stray end tag may have closed the root early): the records "
+                                             "there would be lost", LENIENT_HINT))
+            continue
+        m = _MISMATCH.search(e.message)
+        if e.type_name != "ERR_TAG_NAME_MISMATCH" or m is None:
+            continue
+        opened, line, closing = m.group(1), int(m.group(2)), m.group(3)
+        element = next((el for el in root.iter(opened) if el.sourceline == line), None)
+        left_open = element is not None and any(a.tag == closing for a in element.iterancestors())
+        # an element left open with only text inside swallowed nothing; one holding elements
+        # (a record with its fields) has taken the records after it
+        if element is not None and element.getparent() is None and _more_after(data, e.line, e.column):
+            structural.append(Problem(where, f"{what}: </{closing}> closes the root element <{opened}> early (a stray "
+                                             "end tag?): the records after it would be lost", LENIENT_HINT))
+        elif left_open and any(isinstance(c.tag, str) for c in element):
+            structural.append(Problem(where, f"{what}: <{opened}> (line {line}) is never closed, so </{closing}> "
+                                             f"closes it and everything after it is nested inside it (a missing "
+                                             f"</{opened}>?)", LENIENT_HINT))
+        else:
+            harmless.append(Problem(where, f"{what}: </{closing}> closes <{opened}> (line {line}); read as "
+                                           f"</{opened}>"))
+    return harmless, structural
+
+
+def parse_tolerant_xml(data: bytes | str, source: str, what: str, *, lenient: bool = False,
+                       warnings: list[str] | None = None) -> etree._Element:
     """Parse ``data`` like the original's lenient reader and return the first top-level element.
 
-    Mismatched end tags close the innermost open element and content after the first top-level
-    element is ignored.  A DOCTYPE (and therefore any entity declaration) is rejected before
-    anything could be expanded; other syntax errors are reported at ``file:line:col``.
-    ``what`` names the document in messages (``world knowledge``, ``configuration``).
+    The original's reader repairs mismatched end tags and ignores content after the root.  Here
+    every repair is a warning at ``file:line:col`` (appended to ``warnings``); a repair that
+    changes which records exist or how they nest is an error unless ``lenient``.  A DOCTYPE
+    (and therefore any entity declaration) is rejected before anything could be expanded; other
+    syntax errors are reported at ``file:line:col``.  ``what`` names the document in messages
+    (``world knowledge``, ``configuration``).
     """
     if isinstance(data, str):
         # the text is already decoded: re-encode as UTF-8 and make the declaration say so
@@ -160,6 +214,11 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str) -> etree._Elem
             Problem(located(source, line, column), f"XML syntax error in {what}: {'; '.join(messages)}")
             for (line, column), messages in by_position.items()
         ])
+    harmless, structural = _recoveries(parser, root, data, source, what)
+    if structural and not lenient:
+        raise MissionError(structural)
+    if warnings is not None:
+        warnings.extend(f"{p.where}: {p.message}" for p in harmless + structural)
     return root
 
 
@@ -264,6 +323,7 @@ class WorldKnowledge:
     source: str
     root: etree._Element  # the xml_root element; its element children are the records
     unique_id: str = "name"
+    warnings: tuple[str, ...] = ()  # repairs of the XML, located
 
     # -- records ------------------------------------------------------------------------------
 
@@ -335,7 +395,7 @@ class WorldKnowledge:
 
 
 def load_knowledge(
-    path: str | os.PathLike[str], xml_root: str | None, unique_id: str = "name"
+    path: str | os.PathLike[str], xml_root: str | None, unique_id: str = "name", *, lenient: bool = False
 ) -> WorldKnowledge:
     """Read the world knowledge file and locate the record container.
 
@@ -349,7 +409,8 @@ def load_knowledge(
         "The world knowledge file is named by world_db.path in the configuration; a relative path "
         "is looked up from the current directory, then from the mission folder.",
     )
-    doc_root = parse_tolerant_xml(data, source, "world knowledge")
+    warnings: list[str] = []
+    doc_root = parse_tolerant_xml(data, source, "world knowledge", lenient=lenient, warnings=warnings)
     root: etree._Element | None
     if xml_root is None:
         root = doc_root
@@ -364,4 +425,4 @@ def load_knowledge(
             f"Set world_db.xml_root in the configuration to the tag of the element that holds the "
             f"records (the document root here is <{doc_root.tag}>).",
         ))
-    return WorldKnowledge(source=source, root=root, unique_id=unique_id or "name")
+    return WorldKnowledge(source=source, root=root, unique_id=unique_id or "name", warnings=tuple(warnings))
