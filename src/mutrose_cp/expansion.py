@@ -12,7 +12,7 @@ original does; nested operators of one annotation belong to the same goal and sh
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Mapping
 
 from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
 from .errors import MissionError, Problem
@@ -89,7 +89,8 @@ class _Walker:
         self.domain = domain
         self.config = config
         self.world = world
-        self.bindings: dict[str, Binding] = {}
+        self.bindings: dict[str, Binding] = {}  # changed only through _bind
+        self._shared: Mapping[str, Binding] | None = None
         self.counters: dict[int, int] = {}  # depth -> current forAll index (1-based)
         self.events: dict[int, str] = {}  # depth -> trigger event text
         self.instances: list[TaskInstance] = []
@@ -108,8 +109,25 @@ class _Walker:
         for d in [d for d in self.events if d >= depth]:
             del self.events[d]
 
-    def _snapshot(self) -> dict[str, Binding]:
-        return dict(self.bindings)
+    def _bind(self, name: str, binding: Binding) -> None:
+        self.bindings[name] = binding
+        self._shared = None  # the next snapshot is a new one
+
+    def _snapshot(self) -> Mapping[str, Binding]:
+        """The variable values at this node.  Nodes between two changes of the bindings share
+        one copy (never modified: readers build new mappings), so memory grows with the changes,
+        not with goals times variables."""
+        if self._shared is None:
+            self._shared = dict(self.bindings)
+        return self._shared
+
+    def _leaf_snapshot(self, node: GMNode) -> Mapping[str, Binding]:
+        """A goal leaf (a query, an empty forAll) keeps only the variables it declares: what is
+        shown for it.  Thousands of query goals would otherwise each copy every variable."""
+        names = [d.name for d in (*node.controls, *node.monitors)]
+        if node.forall is not None:
+            names += [node.forall.iterated, node.forall.iteration]
+        return {n: self.bindings[n] for n in names if n in self.bindings}
 
     def _where(self, node: GMNode) -> str:
         return f"{self.gm.source}: {'goal' if node.kind == 'goal' else 'task'} {node.id}"
@@ -126,9 +144,9 @@ class _Walker:
         var = node.controls[0]
         ids = tuple(record_id(r, self.world.unique_id) for r in records)
         if var.is_collection:
-            self.bindings[var.name] = Binding(ids, var.type, tuple(records))
+            self._bind(var.name, Binding(ids, var.type, tuple(records)))
         else:
-            self.bindings[var.name] = Binding(ids[0] if ids else "", var.type, tuple(records[:1]))
+            self._bind(var.name, Binding(ids[0] if ids else "", var.type, tuple(records[:1])))
 
     # -- the walk ----------------------------------------------------------------------------
     def walk(self, node: GMNode, depth: int) -> RatNode:
@@ -137,11 +155,11 @@ class _Walker:
             return self._task(node)
         if node.goal_type == "Query" and node.query is not None:
             self._resolve_query(node)
-            return RatNode(GOAL, node.id, node.key, var_maps=self._snapshot())
+            return RatNode(GOAL, node.id, node.key, var_maps=self._leaf_snapshot(node))
         if node.context is not None and node.context.kind == "trigger":
             self.events[depth] = node.context.text
         if not node.children:
-            return RatNode(GOAL, node.id, node.key, var_maps=self._snapshot())
+            return RatNode(GOAL, node.id, node.key, var_maps=self._leaf_snapshot(node))
         if node.forall is not None:
             return self._forall(node, depth)
         return self._expand(node, depth)
@@ -160,13 +178,13 @@ class _Walker:
         it_type = decl.type if decl is not None else ""
         elements = list(zip(iterated.value, iterated.records))
         if not elements:
-            return RatNode(GOAL, node.id, node.key, var_maps=self._snapshot())
+            return RatNode(GOAL, node.id, node.key, var_maps=self._leaf_snapshot(node))
         self.counters[depth] = 1
         copies: list[RatNode] = []
         outermost = len(self.counters) == 1
         for i, (value, record) in enumerate(elements):
             self.counters[depth] = i + 1
-            self.bindings[fa.iteration] = Binding(value, it_type, (record,))
+            self._bind(fa.iteration, Binding(value, it_type, (record,)))
             copies.append(self._expand(node, depth))
             if outermost and self.progress is not None:
                 self.progress(i + 1, len(elements))
