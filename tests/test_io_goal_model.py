@@ -307,7 +307,7 @@ def test_missing_file(tmp_path: Path) -> None:
         load_goal_model(missing)
     (problem,) = info.value.problems
     assert problem.where == str(missing)
-    assert "not found" in problem.message
+    assert problem.message == "cannot read goal model file: No such file or directory"
 
 
 def test_load_reads_a_file(tmp_path: Path) -> None:

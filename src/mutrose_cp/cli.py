@@ -20,6 +20,7 @@ from typing import Sequence
 from . import __version__
 from .errors import MissionError, NoDecompositionError
 from .interrupt import Interrupted, phase, signal_handlers
+from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
 from .output import SplitListing
 
@@ -160,8 +161,7 @@ def _costs(mission: Mission, path: str | None) -> dict[int, int]:
     methods: dict[str, int] = {}
     default = 1
     if path:
-        from .io.knowledge import read_bytes
-        from .io.text import decode_utf8
+        from .io.text import decode_utf8, read_bytes
 
         text = decode_utf8(read_bytes(path, "cost"), path, "cost file")
         try:
@@ -424,6 +424,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--lenient-xml", action="store_true",
                        help="read XML whose repair changes which records exist or how they nest, as the original "
                             "does (with warnings) instead of refusing it")
+        p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+                       help="refuse input files larger than this (default 256)")
         p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
         p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
 
@@ -518,7 +520,7 @@ def _main(argv: Sequence[str] | None) -> int:
         # module's initialisation aborts the process
         import mutrose_cp.solve.cpsat  # noqa: F401
     try:
-        with signal_handlers():
+        with signal_handlers(), input_limit(args.max_input_mb * MB):
             return args.func(args)
     except Interrupted as stop:
         print(f"interrupted{' while ' + stop.during if stop.during else ''} ({stop}): no output was written",

@@ -26,6 +26,9 @@ from .query import Binding, run_select
 Value = str | tuple[str, ...]
 
 
+MAX_GOAL_DEPTH = 10_000  # goal levels; deeper models are refused with the goal named
+
+
 @dataclass(frozen=True)
 class ParameterValue:
     """One entry of an instance's variable mapping: an HDDL parameter and its value."""
@@ -150,6 +153,9 @@ class _Walker:
 
     # -- the walk ----------------------------------------------------------------------------
     def walk(self, node: GMNode, depth: int) -> RatNode:
+        if depth > MAX_GOAL_DEPTH:
+            raise MissionError(f"the goal model is nested more than {MAX_GOAL_DEPTH} levels deep here; "
+                               "flatten the chain of single-child goals", self._where(node))
         self._enter(depth)
         if node.kind == "task":
             return self._task(node)

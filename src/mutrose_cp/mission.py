@@ -6,11 +6,13 @@ constraints.  Both decomposition algorithms read the same Task Graph.
 """
 from __future__ import annotations
 
+import functools
 import os
+import sys
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, TypeVar
 
 from .constraints import Constraint, generate_constraints
 from .errors import MissionError
@@ -107,6 +109,28 @@ def find_mission_files(folder: str | os.PathLike, config_name: str | None = None
     return hddl, gm, config
 
 
+T = TypeVar("T")
+STAGE_RECURSION_LIMIT = 100_000
+
+
+def _deep(stage: Callable[..., T]) -> Callable[..., T]:
+    """Run a pipeline stage with a recursion limit for deep goal models.
+
+    The stages recurse once per goal level (up to ``expansion.MAX_GOAL_DEPTH`` levels, a few
+    frames each).  Python-to-Python calls need no C stack, so a high limit is safe there; it is
+    not raised while inputs are parsed, where C decoders (JSON) recurse on the C stack."""
+    @functools.wraps(stage)
+    def run(*args: Any, **kwargs: Any) -> T:
+        previous = sys.getrecursionlimit()
+        sys.setrecursionlimit(max(previous, STAGE_RECURSION_LIMIT))
+        try:
+            return stage(*args, **kwargs)
+        finally:
+            sys.setrecursionlimit(previous)
+
+    return run
+
+
 @dataclass
 class Mission:
     """The loaded inputs of a mission and its lazily computed pipeline stages."""
@@ -165,6 +189,7 @@ class Mission:
         return build_initial_state(self.domain, self.config, self.knowledge)
 
     @cached_property
+    @_deep
     def expansion(self) -> Expansion:
         report = None
         if self.progress is not None:
@@ -181,13 +206,16 @@ class Mission:
         return all_task_paths(self.domain)
 
     @cached_property
+    @_deep
     def task_graph(self) -> TaskGraph:
         return build_task_graph(self.expansion, self.goal_model, self.config, self.initial_state, self.paths)
 
     @cached_property
+    @_deep
     def constraints(self) -> list[Constraint]:
         return generate_constraints(self.task_graph)
 
+    @_deep
     def exploratory(self, progress: Callable[[int, int], None] | None = None) -> list[list[int]]:
         """Valid mission decompositions by the original's explicit combination."""
         from .solve.exploratory import ExploratoryDecomposer
@@ -195,6 +223,7 @@ class Mission:
         return ExploratoryDecomposer(self.task_graph, self.constraints, self.domain, self.goal_model,
                                      self.config, self.initial_state, progress).run()
 
+    @_deep
     def encoding(self, explain: bool = False):
         """The boolean model of the valid mission decompositions (see ``solve/encoding.py``)."""
         from .solve.encoding import Encoder
@@ -202,6 +231,7 @@ class Mission:
         return Encoder(self.task_graph, self.constraints, self.domain, self.goal_model, self.config,
                        self.initial_state, explain).encode()
 
+    @_deep
     def decomposition_space(self, progress: Callable[[int, int], None] | None = None, keep: bool = True):
         """The valid mission decompositions as a product of independently solved components."""
         from .solve.cpsat import build_space

@@ -21,10 +21,9 @@ from .knowledge import (
     json_depth_problem,
     json_syntax_problem,
     parse_tolerant_xml,
-    read_bytes,
     text_of,
 )
-from .text import decode_utf8
+from .text import decode_utf8, read_bytes
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,6 @@ import os
 import re
 from dataclasses import dataclass, field
 from functools import cached_property
-from pathlib import Path
 from typing import Any, Callable, TypeVar
 
 from ..errors import MissionError, Problem
@@ -30,7 +29,7 @@ from .expressions import (
     parse_select,
 )
 from .knowledge import hinted, json_depth_problem, json_syntax_problem
-from .text import decode_utf8
+from .text import decode_utf8, read_bytes
 
 
 @dataclass(frozen=True)
@@ -171,12 +170,7 @@ def load_goal_model(path: str | os.PathLike[str]) -> GoalModel:
     at ``file:line:col`` for invalid JSON, and with every node/link problem otherwise.
     """
     source = os.fspath(path)
-    try:
-        data = Path(source).read_bytes()
-    except FileNotFoundError:
-        raise MissionError("goal model file not found", source) from None
-    except OSError as err:
-        raise MissionError(f"cannot read goal model: {err.strerror or err}", source) from None
+    data = read_bytes(source, "goal model")
     return parse_goal_model(decode_utf8(data, source, "goal model"), source)
 
 

@@ -17,7 +17,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from ..errors import MissionError, Problem, located
-from .text import decode_utf8
+from .text import decode_utf8, read_bytes
 
 # ---------------------------------------------------------------------------------------------
 # Model
@@ -201,11 +201,7 @@ def _parser() -> Lark:
 def load_domain(path: str | os.PathLike[str]) -> Domain:
     """Read and parse the HDDL domain file at ``path``; locations in errors use ``path`` as given."""
     source = os.fspath(path)
-    try:
-        with open(source, "rb") as handle:
-            data = handle.read()
-    except OSError as exc:
-        raise MissionError(Problem(located(source), f"cannot read the HDDL domain: {exc.strerror or exc}")) from None
+    data = read_bytes(source, "HDDL domain")
     return parse_domain(decode_utf8(data, source, "HDDL domain"), source)
 
 

@@ -19,6 +19,7 @@ from typing import Iterator
 from lxml import etree
 
 from ..errors import MissionError, Problem, located
+from .text import read_bytes
 
 # ---------------------------------------------------------------------------------------------
 # Problems shared by the readers (configuration, goal model, knowledge)
@@ -220,18 +221,6 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str, *, lenient: bo
     if warnings is not None:
         warnings.extend(f"{p.where}: {p.message}" for p in harmless + structural)
     return root
-
-
-def read_bytes(path: str | os.PathLike[str], what: str, hint: str = "") -> bytes:
-    """Read a whole input file; a missing/unreadable file is a located MissionError (with
-    ``hint`` saying where the path came from)."""
-    try:
-        with open(path, "rb") as fh:
-            return fh.read()
-    except OSError as exc:
-        raise MissionError(
-            hinted(os.fspath(path), f"cannot read {what} file: {exc.strerror or exc}", hint)
-        ) from None
 
 
 # ---------------------------------------------------------------------------------------------
