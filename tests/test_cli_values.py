@@ -63,3 +63,23 @@ def test_zero_robots_rejected(tmp_path, capsys, robots):
     gm.write_text(json.dumps(data))
     assert main(["check", str(folder)]) == 2
     assert f"Invalid declaration of robot number: {robots} (a task needs at least one robot)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text,read", [("1e9", "1"), ("NaN", "0"), ("Infinity", "0"), ("12abc", "12")])
+def test_world_numbers_read_as_the_original_does_are_warned(tmp_path, capsys, text, read):
+    from conftest import require_reference
+
+    folder = tmp_path / "mission"
+    shutil.copytree(require_reference() / "missions" / "object-picking-function", folder)
+    world = folder / "knowledge" / "World_db.xml"
+    world.write_text(world.read_text().replace("<num_objects>1</num_objects>", f"<num_objects>{text}</num_objects>", 1))
+    assert main(["check", str(folder)]) == 0
+    assert f"{world}:4: Room RoomA: num_objects '{text}' is read as {read}, as the original reads numbers" \
+        in capsys.readouterr().err
+
+
+def test_plain_world_numbers_are_not_warned(tmp_path, capsys):
+    from conftest import require_reference
+
+    assert main(["check", str(require_reference() / "missions" / "object-picking-function")]) == 0
+    assert "is read as" not in capsys.readouterr().err

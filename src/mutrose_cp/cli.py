@@ -324,7 +324,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
 
 def _warn(args: argparse.Namespace, mission: Mission) -> None:
     if not getattr(args, "quiet", False):
-        for w in mission.warnings:
+        for w in (*mission.warnings, *mission.initial_state.warnings):
             print(f"warning: {w}", file=sys.stderr)
 
 

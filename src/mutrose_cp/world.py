@@ -18,7 +18,15 @@ from lxml import etree
 from .errors import MissionError, Problem, located
 from .io.config import Configuration, SemanticMapping
 from .io.hddl import Domain
-from .io.knowledge import WorldKnowledge, child, element_children, parse_bool, parse_number, text_of
+from .io.knowledge import (
+    WorldKnowledge,
+    child,
+    element_children,
+    number_is_partial,
+    parse_bool,
+    parse_number,
+    text_of,
+)
 
 Number = int | float
 
@@ -48,6 +56,7 @@ class InitialState:
     sorts: dict[str, frozenset[str]]
     literals: tuple[GroundLiteral, ...]
     functions: tuple[tuple[tuple[str, tuple[str, ...]], Number], ...]
+    warnings: tuple[str, ...] = ()  # world values read differently from how they are written
 
     @cached_property
     def _literal_index(self) -> dict[tuple[str, tuple[str, ...]], bool]:
@@ -181,13 +190,14 @@ def build_initial_state(domain: Domain, config: Configuration, knowledge: WorldK
     records = _RecordCache(knowledge)
     literals: list[GroundLiteral] = []
     functions: list[tuple[tuple[str, tuple[str, ...]], Number]] = []
+    warnings: list[str] = []
     for mapping in config.semantic_mapping:
         if mapping.type == "attribute":
-            _attribute(mapping, config, records, sorts, literals, functions)
+            _attribute(mapping, config, records, sorts, literals, functions, warnings, knowledge.source)
         elif mapping.type == "ownership" and mapping.mapped_type == "predicate":
             _ownership(mapping, config, records, sorts, literals)
         # relationship mappings add nothing [bug of the original, reproduced]
-    return InitialState(sorts=sorts, literals=tuple(literals), functions=tuple(functions))
+    return InitialState(sorts=sorts, literals=tuple(literals), functions=tuple(functions), warnings=tuple(warnings))
 
 
 class _RecordCache:
@@ -222,6 +232,8 @@ def _attribute(
     sorts: dict[str, frozenset[str]],
     literals: list[GroundLiteral],
     functions: list[tuple[tuple[str, tuple[str, ...]], Number]],
+    warnings: list[str],
+    knowledge_source: str,
 ) -> None:
     if m.relates_to.lower() == "robot" or m.mapped_type not in ("predicate", "function"):
         return  # robot attributes only serve the output; there is no robot knowledge
@@ -242,7 +254,13 @@ def _attribute(
         if is_predicate:
             literals.append(GroundLiteral(pred, args, parse_bool(text_of(value_el))))
         else:
-            functions.append(((pred, args), parse_number(text_of(value_el))))
+            text = text_of(value_el)
+            value = parse_number(text)
+            if number_is_partial(text):
+                warnings.append(f"{located(knowledge_source, value_el.sourceline)}: {m.relates_to} {rid}: {name} "
+                                f"{text.strip()!r} is read as {value}, as the original reads numbers (the longest "
+                                "number at its start, else 0); write a plain number")
+            functions.append(((pred, args), value))
 
 
 def _ownership(

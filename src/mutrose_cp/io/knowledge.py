@@ -279,6 +279,15 @@ def parse_bool(text: str) -> bool:
     return text.lstrip(_CPP_SPACE).lower().startswith("true")
 
 
+def number_is_partial(text: str) -> bool:
+    """Whether :func:`parse_number` reads only a part of ``text`` (``1e9`` read as 1, ``NaN`` as
+    0): the original's stream semantics, which a user rarely means."""
+    s = text.strip(_CPP_SPACE)
+    pattern = _FLOAT_PREFIX if "." in text else _INT_PREFIX
+    m = pattern.match(s)
+    return m is None or m.end() != len(s)
+
+
 def parse_number(text: str) -> int | float:
     """Float if the text contains ``.``, else int; like ``istream >>``: leading blanks skipped,
     the longest numeric prefix read, trailing garbage ignored, a non-number gives 0."""
