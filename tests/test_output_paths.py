@@ -186,3 +186,18 @@ def test_concurrent_writers_leave_one_whole_output(mission, tmp_path):
     text = out.read_text()
     assert text.startswith("<?xml") or json.loads(text)["tasks"]  # one writer's whole file
     _no_temporaries(tmp_path)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_a_read_only_folder(mission, tmp_path, capsys):
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        target = folder / "out.json"
+        assert main(["decompose", str(mission), "-q", "-o", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert f"error: {target}: cannot write the output: Permission denied" in err
+        assert list(folder.iterdir()) == []
+    finally:
+        folder.chmod(0o755)
