@@ -16,7 +16,14 @@ When the exploratory algorithm raises ``NoDecompositionError`` the space must be
   decompositions (``hypothesis.event``); ``hypothesis.target`` steers towards missions with
   many decompositions.
 * ``test_strategy_is_not_trivial``: 200 draws with a fixed seed; at least 20% of the missions
-  have two or more valid decompositions and some have none.
+  have two or more valid decompositions and some have none; every shape of the mix occurs.
+* ``test_agree_on_<shape>``: one bounded property per mission shape of ``missiongen`` (long
+  ``;`` sequences, contradictory/duplicate preconditions, unique-branch Task Graphs, nested
+  forAll with plain Achieve goals, direct tasks beside goals under ``;``); examples per shape
+  from ``MUTROSE_DIFF_SHAPE_EXAMPLES`` (default 30).
+* ``test_shape_is_not_trivial[<shape>]``: 40 draws of each shape with a fixed seed really have
+  that shape (e.g. >= 10 task vertices under one ``;``, a unique-branch Task Graph, two-level
+  forAll instance ids) and a fair share of them has a valid decomposition.
 * ``test_agree_on_reference_corpus``: every configuration of the reference missions
   (``MUTROSE_REFERENCE``, default ``../shared/reference``; skipped when absent, except on CI).
 * ``test_agree_on_3_power_8``: eight rooms, each an OR choice of three valid tasks: 3**8 = 6561.
@@ -33,12 +40,29 @@ import pytest
 from hypothesis import HealthCheck, Phase, event, given, note, seed, settings, target
 
 from mutrose_cp.errors import NoDecompositionError
+from mutrose_cp.io.hddl import Literal
 from mutrose_cp.mission import Mission, find_mission_files
 
 from conftest import REFERENCE, require_reference
-from missiongen import MissionSpec, load_mission, missions, or_choices_mission
+from missiongen import (
+    SHAPES,
+    MissionSpec,
+    beside_goals,
+    contradictory_methods,
+    contradictory_missions,
+    duplicate_preconditions,
+    goal_nodes,
+    load_mission,
+    long_sequences,
+    missions,
+    nested_forall_missions,
+    or_choices_mission,
+    tasks_beside_goals,
+    unique_branch_missions,
+)
 
 EXAMPLES = int(os.environ.get("MUTROSE_DIFF_EXAMPLES", "120"))
+SHAPE_EXAMPLES = int(os.environ.get("MUTROSE_DIFF_SHAPE_EXAMPLES", "30"))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -84,13 +108,13 @@ def _bucket(n: int) -> str:
 # Random missions
 
 
-@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-@given(missions())
-def test_agree_on_random_missions(spec: MissionSpec):
+def check_random_mission(spec: MissionSpec) -> None:
+    """The property of every random test: both algorithms agree on ``spec``."""
     note(spec.summary())
     note(spec.dump())
     mission = load_mission(spec)
     count = assert_agree(mission)
+    event(f"shape: {spec.shape}")
     event(f"valid decompositions: {_bucket(count)}")
     event(f"task instances: {len(mission.expansion.instances)}")
     if count >= 2:
@@ -98,10 +122,24 @@ def test_agree_on_random_missions(spec: MissionSpec):
     target(float(min(count, 100)), label="valid decompositions")
 
 
+RANDOM = settings(max_examples=EXAMPLES, deadline=None,
+                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+SHAPED = settings(max_examples=SHAPE_EXAMPLES, deadline=None,
+                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+
+
+@RANDOM
+@given(missions())
+def test_agree_on_random_missions(spec: MissionSpec):
+    check_random_mission(spec)
+
+
 def test_strategy_is_not_trivial():
     """200 draws with a fixed seed: at least 20% of the missions have two or more valid
-    decompositions, and some have none (the strategy exercises choices and failures)."""
+    decompositions, some have none (the strategy exercises choices and failures), and every
+    shape of the mix occurs."""
     counts: list[int] = []
+    shapes: list[str] = []
 
     @seed(20251122)
     @settings(max_examples=200, deadline=None, database=None, phases=[Phase.generate],
@@ -109,12 +147,136 @@ def test_strategy_is_not_trivial():
     @given(missions())
     def draw(spec: MissionSpec) -> None:
         counts.append(load_mission(spec).decomposition_space().count)
+        shapes.append(spec.shape)
 
     draw()
     assert len(counts) >= 190, f"only {len(counts)} missions drawn"
     several = sum(1 for c in counts if c >= 2)
     assert several >= 0.2 * len(counts), f"{several}/{len(counts)} missions with >= 2 decompositions"
     assert any(c == 0 for c in counts), "no mission without a valid decomposition"
+    for shape in SHAPES:  # a tenth of each expected; hypothesis's generation is far from uniform
+        assert shapes.count(shape) >= 2, f"shape {shape}: {shapes.count(shape)}/{len(shapes)} draws"
+
+
+# ---------------------------------------------------------------------------------------------
+# Mission shapes (missiongen.SHAPES): one bounded property each
+
+
+@SHAPED
+@given(long_sequences())
+def test_agree_on_long_sequences(spec: MissionSpec):
+    """10-15 tasks under one ``;`` that set, unset and require one room predicate: the order in
+    which effects are applied matters (``AT10_1`` sorts before ``AT2_1`` as a string)."""
+    check_random_mission(spec)
+
+
+@SHAPED
+@given(contradictory_missions())
+def test_agree_on_contradictory_preconditions(spec: MissionSpec):
+    """Self-contradictory and duplicate method preconditions."""
+    check_random_mission(spec)
+
+
+@SHAPED
+@given(unique_branch_missions())
+def test_agree_on_unique_branch_missions(spec: MissionSpec):
+    """Unique-branch Task Graphs (§5.5, §7.7) with numeric (level) preconditions."""
+    check_random_mission(spec)
+
+
+@SHAPED
+@given(nested_forall_missions())
+def test_agree_on_nested_forall(spec: MissionSpec):
+    """A forAll over the items of each room (a second Query + forAll level) with plain Achieve
+    goals and tasks over the item inside."""
+    check_random_mission(spec)
+
+
+@SHAPED
+@given(tasks_beside_goals())
+def test_agree_on_tasks_beside_goals(spec: MissionSpec):
+    """Direct tasks beside goals under a ``;`` annotation (``[G4;AT2;G5]``)."""
+    check_random_mission(spec)
+
+
+def _semicolon_tasks(mission: Mission) -> int:
+    """The most task vertices directly below one ``;`` operator of the (trimmed) Task Graph."""
+    tg = mission.task_graph
+    return max([sum(1 for u in tg.children(v.index) if tg.vertices[u].kind == "task")
+                for v in tg.vertices if v.kind == "op" and v.content == ";"] or [0])
+
+
+def _toggles(mission: Mission) -> bool:
+    """Some decomposition sets a room predicate that another one unsets."""
+    effects = {(e.predicate, e.args, e.positive) for d in mission.task_graph.decompositions()
+               for e in d.decomposition.predicates.effects}
+    return any((p, a, False) in effects for p, a, positive in effects if positive)
+
+
+def _numeric_preconditions(mission: Mission) -> bool:
+    return any(not isinstance(c, Literal) for d in mission.task_graph.decompositions()
+               for c in d.decomposition.predicates.preconditions)
+
+
+def _shape_facts(spec: MissionSpec, mission: Mission) -> dict[str, bool]:
+    """What makes a drawn mission an instance of its shape (each fact is checked for a share of
+    the draws, see ``SHAPE_FACTS``)."""
+    tree_goals = list(goal_nodes(spec.tree))
+    item_foralls = [g for g in tree_goals if g.forall is not None]
+    return {
+        "long ; sequence": _semicolon_tasks(mission) >= 10,
+        "set and unset one predicate": _toggles(mission),
+        "contradictory precondition": bool(contradictory_methods(spec)),
+        "duplicate precondition": bool(duplicate_preconditions(spec)),
+        "unique branch": mission.task_graph.unique_branch,
+        "numeric precondition": _numeric_preconditions(mission),
+        "item forAll": bool(item_foralls),
+        "two-level instance ids": any(i.id.count("_") == 2 for i in mission.expansion.instances),
+        "plain Achieve below the item forAll": any(g.achieve for f in item_foralls for g in goal_nodes(f)),
+        "direct task beside goals under ;": bool(beside_goals(spec.tree)),
+        "; operator with a direct task": any(
+            v.kind == "op" and v.content == ";" and any(mission.task_graph.vertices[u].kind == "task"
+                                                        for u in mission.task_graph.children(v.index))
+            for v in mission.task_graph.vertices),
+    }
+
+
+# shape -> {fact: least share of the draws that have it}
+SHAPE_FACTS = {
+    "long_sequence": {"long ; sequence": 0.8, "set and unset one predicate": 0.8},
+    "contradictory": {"contradictory precondition": 1.0, "duplicate precondition": 1.0},
+    "unique_branch": {"unique branch": 1.0, "numeric precondition": 0.4},
+    "nested_forall": {"item forAll": 1.0, "two-level instance ids": 0.6, "plain Achieve below the item forAll": 0.5},
+    "tasks_beside_goals": {"direct task beside goals under ;": 1.0, "; operator with a direct task": 0.5},
+}
+
+
+@pytest.mark.parametrize("shape", sorted(SHAPE_FACTS))
+def test_shape_is_not_trivial(shape: str):
+    """40 draws of a shape with a fixed seed: they have the shape's facts (``SHAPE_FACTS``), at
+    least 20% of them have a valid decomposition and some have several (the agreement is not
+    only about failures)."""
+    facts: list[dict[str, bool]] = []
+    counts: list[int] = []
+
+    @seed(20251123)
+    @settings(max_examples=40, deadline=None, database=None, phases=[Phase.generate],
+              suppress_health_check=list(HealthCheck))
+    @given(missions(shape))
+    def draw(spec: MissionSpec) -> None:
+        assert spec.shape == shape
+        mission = load_mission(spec)
+        facts.append(_shape_facts(spec, mission))
+        counts.append(mission.decomposition_space().count)
+
+    draw()
+    assert len(facts) >= 38, f"only {len(facts)} missions drawn"
+    for fact, share in SHAPE_FACTS[shape].items():
+        have = sum(1 for f in facts if f[fact])
+        assert have >= share * len(facts), f"{shape}: {fact} in {have}/{len(facts)} draws"
+    valid = sum(1 for c in counts if c >= 1)
+    assert valid >= 0.2 * len(counts), f"{shape}: {valid}/{len(counts)} missions with a valid decomposition"
+    assert any(c >= 2 for c in counts), f"{shape}: no mission with two or more valid decompositions"
 
 
 # ---------------------------------------------------------------------------------------------
