@@ -392,6 +392,7 @@ class _PathGenerator:
         executable = True
         facts: list = []
         values: list = []
+        equals: list = []  # the "=" preconditions assumed so far
         guards: list = []
         for c in step.preconditions:
             if isinstance(c, Literal):
@@ -416,8 +417,9 @@ class _PathGenerator:
                     values.append((key, c.value - delta))
                     guards.append((key, c.value))
                 else:
-                    if any(k == key and v != c.value for k, v in values):
-                        executable = False  # two different assumed values of one function
+                    if any(k == key and v != c.value for k, v in equals):
+                        executable = False  # the step requires two different values of one function
+                    equals.append((key, c.value))
                     values.append((key, c.value))
         return executable, (facts, values), guards
 
@@ -460,9 +462,20 @@ Value = str | tuple[str, ...]
 class GroundPredicates:
     """Preconditions and net effects of a decomposition of one task instance."""
 
-    preconditions: tuple[Literal | Comparison, ...]  # path order, duplicates kept
+    preconditions: tuple[Literal | Comparison, ...]  # path order, duplicates kept (as printed)
     effects: tuple[Literal, ...]  # net effects, in the order they are first declared
     numeric_effects: tuple[tuple[str, tuple[str, ...], str, int], ...]  # (fn, args, kind, amount)
+    # numeric preconditions of later steps on a function that earlier steps only increased or
+    # decreased, as conditions on its value where the decomposition starts: (> f N) after
+    # (increase f 2) is (> f N-2).  Not printed (the original drops them); checked like the rest.
+    shifted: tuple[Comparison, ...] = ()
+    # preconditions that earlier steps of the path make false: the decomposition can never run
+    unsatisfiable: tuple[str, ...] = ()
+
+    @property
+    def checked_preconditions(self) -> tuple[Literal | Comparison, ...]:
+        """Every precondition the decomposition's start state must satisfy."""
+        return self.preconditions + self.shifted
 
     @property
     def ground_effects(self) -> tuple[Literal, ...]:
@@ -491,6 +504,8 @@ def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
     seen_ground: set[tuple[str, tuple[str, ...]]] = set()
     seen_numeric: set[tuple[str, tuple[str, ...]]] = set()
     seen_free: set[tuple[str, tuple[str, ...]]] = set()
+    shifted: list[Comparison] = []
+    unsatisfiable: list[str] = []
     for step in path.steps:
         for c in step.preconditions:
             grounds = _groundings(c.args, binding)
@@ -502,6 +517,10 @@ def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
                 for g in grounds:
                     if (c.predicate, g) not in seen_ground:
                         pre.append(Literal(c.predicate, g, c.positive))
+                    elif net_eff[(c.predicate, g)] != c.positive:
+                        # an earlier step of the path (inside an abstract subtask, whose effects
+                        # path generation does not pass on) made it false: never executable
+                        unsatisfiable.append(f"{'' if c.positive else 'not '}{c.predicate}({', '.join(g)})")
             else:
                 if grounds is None:
                     pre.append(c)
@@ -509,6 +528,13 @@ def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
                 for g in grounds:
                     if (c.function, g) not in seen_numeric:
                         pre.append(Comparison(c.function, g, c.op, c.value, c.negated))
+                    elif numeric[(c.function, g)][0] != "assign":
+                        # only changed by amounts so far: a condition on the starting value (the
+                        # original drops it, which accepts the path whatever the world says)
+                        shifted.append(Comparison(c.function, g, c.op, c.value - numeric[(c.function, g)][1],
+                                                  c.negated))
+                    elif not compare(numeric[(c.function, g)][1], c.op, c.value):
+                        unsatisfiable.append(f"{c.function}({', '.join(g)}) {c.op} {c.value}")
         for e in step.effects:
             grounds = _groundings(e.args, binding)
             if grounds is None:
@@ -537,6 +563,8 @@ def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
         preconditions=tuple(pre),
         effects=tuple(effects),
         numeric_effects=tuple((f, a, k, v) for (f, a), (k, v) in numeric.items()) + tuple(free_numeric),
+        shifted=tuple(shifted),
+        unsatisfiable=tuple(unsatisfiable),
     )
 
 

@@ -369,7 +369,7 @@ class Encoder:
             dec = dv.decomposition
             if contradicts_itself(dec):
                 self.m.clause([neg(self.x[d])], self._label(f"pre:{dec.id}", f"{dec.id}: its preconditions contradict each other"))
-            for c in dec.predicates.preconditions:
+            for c in dec.predicates.checked_preconditions:
                 if any(a.startswith("?") for a in c.args):
                     continue
                 label = self._label(f"pre:{dec.id}:{c}", f"{dec.id}: precondition {_show(c)}")

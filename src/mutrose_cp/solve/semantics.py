@@ -104,13 +104,16 @@ class ConstraintIndex:
 
 
 def contradicts_itself(dec: Decomposition) -> bool:
-    """Whether two ground boolean preconditions of ``dec`` require opposite values of one atom.
+    """Whether ``dec`` can never run: two ground boolean preconditions require opposite values
+    of one atom, or a step's precondition is undone by an earlier step of the same path.
 
     The ground preconditions that remain after grounding (§2.5) all speak of the state in which
     the decomposition starts, so such a decomposition can never be executed, whatever the
     world knows.  (Parameters bound to the same entity can make a method's preconditions
     contradict only once grounded; a contradiction visible in the domain already prunes the
     path, ``htn``.)"""
+    if dec.predicates.unsatisfiable:
+        return True  # an earlier step of its own path undoes a later step's precondition
     required: dict[AtomKey, bool] = {}
     for c in dec.predicates.preconditions:
         if isinstance(c, Literal) and is_ground(c.args):
@@ -137,7 +140,7 @@ def ground_preconditions_hold(dec: Decomposition, state: State) -> bool:
     decomposition that contradicts itself never holds."""
     if contradicts_itself(dec):
         return False
-    for c in dec.predicates.preconditions:
+    for c in dec.predicates.checked_preconditions:
         if not is_ground(c.args):
             continue
         if isinstance(c, Literal):
