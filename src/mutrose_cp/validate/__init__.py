@@ -16,8 +16,9 @@ The semantics checked (docs/validate.md):
   state the task starts in, every ground method and action precondition holds (an atom the world
   does not know is assumed on first use, so a decomposition contradicting itself fails);
 * a task starts in the initial world changed by the tasks that the SEQ and FB constraints put
-  before it (transitively, without the fallback alternatives it replaces), applied in file
-  order; tasks that meet under a parallel operator never set one fact both ways;
+  before it (transitively, without the fallback alternatives it replaces), applied in the order
+  the constraints give them (file order where they leave it open); tasks that meet under a
+  parallel operator never set one fact both ways;
 * condition contexts hold in the initial state or where their tasks start (an earlier task
   made them true); achieve conditions (for a ``forAll``, for every element) hold after the
   goal's tasks;
@@ -185,8 +186,20 @@ class _Validator:
                 self._file(f"{c.where}: unknown constraint type {c.kind!r}")
         self.var_types = {d.name: d.base_type for n in gm.nodes for d in (*n.controls, *n.monitors) if d.type}
         self.gm_task_path = {n.id: self._ancestors(n) for n in gm.nodes if n.kind == "task"}
+        self.rank = self._execution_rank()
         self._replays: dict[str, tuple[TaskEffects, list[str]] | None] = {}
         self._noted: set[str] = set()
+
+    def _execution_rank(self) -> dict[str, tuple[int, int]]:
+        """A sort key that lists tasks in an order the SEQ and FB constraints allow (across tasks
+        of other decompositions too), in file order where they leave the order open: effects
+        are applied in this order, not in the order the file happens to list the tasks.  Tasks
+        on a cycle (reported as such) keep their file order."""
+        condensed = nx.condensation(self.seq_fb)
+        scc_of = condensed.graph["mapping"]
+        first = {c: min(self.order[k] for k in condensed.nodes[c]["members"]) for c in condensed}
+        scc_rank = {c: r for r, c in enumerate(nx.lexicographical_topological_sort(condensed, key=first.__getitem__))}
+        return {k: (scc_rank[scc_of[k]], self.order[k]) for k in self.out.tasks}
 
     # -- reporting -----------------------------------------------------------------------------
     def _file(self, message: str) -> None:
@@ -256,8 +269,8 @@ class _Validator:
         return [t for c in node.children for t in self._branch_tasks(c)]
 
     def _or_goal(self, i: int, goal: GMNode, chosen: set[str], errors: list[Violation]) -> None:
-        """At most one branch of an OR goal per instance (instances of one forAll element share
-        their number)."""
+        """One branch of an OR goal per instance (instances of one forAll element share their
+        number): at most one, and at least one where the goal is required."""
         for branch in goal.children:
             for t in self._branch_tasks(branch):
                 between = self.gm_task_path.get(t, [])[: self._depth_below(t, goal)]
@@ -276,6 +289,30 @@ class _Validator:
             if len(branches) > 1:
                 errors.append(Violation(i, goal.id, f"OR goal {goal.id} has more than one chosen branch "
                                                     f"({', '.join(sorted(branches))}) for instance _{number}"))
+        # at least one: for every instance that has tasks in the file in every branch (a branch
+        # without tasks may be the one chosen) and that the decomposition needs
+        present: dict[str, set[str]] = {}
+        for branch in goal.children:
+            tasks = set(self._branch_tasks(branch))
+            for t in self.out.tasks.values():
+                if t.gm_task in tasks:
+                    present.setdefault(t.instance.partition("_")[2], set()).add(branch)
+        for number, branches in sorted(present.items()):
+            if number not in by_number and len(branches) == len(goal.children) and self._or_needed(goal, number, chosen):
+                errors.append(Violation(i, goal.id, f"OR goal {goal.id} has no chosen branch for instance _{number}"))
+
+    def _or_needed(self, goal: GMNode, number: str, chosen: set[str]) -> bool:
+        """Whether a decomposition must choose a branch of ``goal`` for instance ``number``: when
+        no OR goal is above it, or when it chose a task of that instance in the branch of the
+        nearest OR goal above that holds ``goal``."""
+        below = goal
+        for above in self._ancestors(goal):
+            if above.or_decomposed:
+                tasks = set(self._branch_tasks(below.key))
+                return any(gm_task in tasks and n == number
+                           for gm_task, _, n in (inst.partition("_") for inst in chosen))
+            below = above
+        return True
 
     def _depth_below(self, gm_task: str, goal: GMNode) -> int:
         path = self.gm_task_path.get(gm_task, [])
@@ -299,8 +336,12 @@ class _Validator:
         keys_b = [n.key for n in up_b]
         depth_a = next(d for d, n in enumerate(up_a) if n.key in keys_b)
         meet = up_a[depth_a]
-        number_a, number_b = a.instance.partition("_")[2], b.instance.partition("_")[2]
-        if number_a != number_b and any(n.forall is not None for n in up_a[depth_a:]):
+        # an instance number has one component per enclosing forAll, outermost first: the
+        # forAlls at or above the meeting goal are the first components of both numbers
+        common = sum(1 for n in up_a[depth_a:] if n.forall is not None)
+        elements_a = a.instance.split("_")[1:1 + common]
+        elements_b = b.instance.split("_")[1:1 + common]
+        if elements_a != elements_b:
             return "#"  # different elements of a forAll above both
         if depth_a == 0 or keys_b.index(meet.key) == 0:
             return "#"
@@ -321,12 +362,12 @@ class _Validator:
                                            + " -> ".join(self.out.tasks[a].id for a, _ in cycle)))
 
     def _predecessors(self, key: str, chosen: set[str]) -> list[str]:
-        """Chosen tasks that the SEQ and FB constraints put before ``key``, in file order,
+        """Chosen tasks that the SEQ and FB constraints put before ``key``, in execution order,
         without the alternatives a fallback replaces (they failed when ``key`` runs)."""
         task = self.out.tasks[key]
         before = nx.ancestors(self.seq_fb, key) & chosen
         return sorted((p for p in before if self._relation(self.out.tasks[p], task) != "FALLBACK"),
-                      key=self.order.__getitem__)
+                      key=self.rank.__getitem__)
 
     def _state_before(self, keys: list[str], chosen: set[str]) -> State:
         """The initial state changed by every chosen predecessor of ``keys`` (and not by them)."""
@@ -335,7 +376,7 @@ class _Validator:
             preds.update(self._predecessors(k, chosen))
         preds -= set(keys)
         state = self.w0.copy()
-        for p in sorted(preds, key=self.order.__getitem__):
+        for p in sorted(preds, key=self.rank.__getitem__):
             replay = self._replays.get(p)
             if replay is not None:
                 replay[0].apply(state)
@@ -346,8 +387,7 @@ class _Validator:
         chosen = set(keys)
         entry: dict[str, State] = {}
         self._replays = {}
-        for k in nx.lexicographical_topological_sort(self.seq.subgraph(keys), key=self.order.__getitem__) \
-                if nx.is_directed_acyclic_graph(self.seq.subgraph(keys)) else sorted(keys, key=self.order.__getitem__):
+        for k in sorted(keys, key=self.rank.__getitem__):
             start = self._state_before([k], chosen)
             entry[k] = start
             self._replays[k] = self._replay(i, self.out.tasks[k], start, errors)
@@ -502,7 +542,7 @@ class _Validator:
         for key, members in groups.items():
             keys = [t.key for t in members]
             state = self._state_before(keys, chosen)
-            for k in sorted(keys, key=self.order.__getitem__):
+            for k in sorted(keys, key=self.rank.__getitem__):
                 replay = self._replays.get(k)
                 if replay is not None:
                     replay[0].apply(state)
