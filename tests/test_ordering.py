@@ -14,7 +14,7 @@ from mutrose_cp.cli import main
 from mutrose_cp.errors import NoDecompositionError
 from mutrose_cp.mission import Mission
 
-from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
+from missiongen import Action, Change, Cmp, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
 
 NOOP = Action("wait-here")
 SET_LIT = Action("switch-on", eff=(Lit("lit", "?rm"),))
@@ -182,3 +182,35 @@ def test_a_subtask_without_executable_method_makes_its_method_inapplicable(tmp_p
     mission, exploratory, cpsat = _solve(_spec(tree, tasks=(inspect, prepare) + TASKS), tmp_path)
     assert [[s.name for s in p.actions] for p in mission.paths["Prepare"]] == [["switch-on"]]
     assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1"}]
+
+
+def _with_level(tree: GoalNode, tasks, actions, level: int) -> MissionSpec:
+    room = Room("Room1", True, (("lit", True), ("sealed", None)), level)
+    return MissionSpec(("lit", "sealed"), ("charged",), actions, tasks, (room,), True, "", tree)
+
+
+def test_numeric_precondition_after_an_increase_is_checked_on_the_start_value(tmp_path):
+    """bump (level + 1), then Check, whose method needs level = 1.  Path generation takes the
+    unknown level as 0 + 1 and the original then drops the precondition: the decomposition was
+    valid whatever the world said.  It holds when the mission starts at level 0, not at 1."""
+    bump = Action("bump", eff=(Change("increase"),))
+    check = Task("Check", (Method("check-at-one", (Cmp("=", 1),), ("wait-here",)),))
+    bump_then_check = Task("BumpThenCheck", (Method("bump-check", (), ("bump", "Check")),))
+    tree = GoalNode((TaskNode("BumpThenCheck"), TaskNode("Wait")), annotation=("flat", ";"))
+    tasks, actions = (check, bump_then_check, *TASKS), (bump, *ACTIONS)
+    _m, exploratory, cpsat = _solve(_with_level(tree, tasks, actions, 0), tmp_path / "zero")
+    assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1"}]
+    _m, exploratory, cpsat = _solve(_with_level(tree, tasks, actions, 1), tmp_path / "one")
+    assert exploratory == cpsat == []
+
+
+def test_a_precondition_undone_inside_the_path_is_never_valid(tmp_path):
+    """Twice runs Inner two times; Inner needs the light on and switches it off.  Path
+    generation does not pass an abstract subtask's effects on to the next one, and the second
+    Inner's precondition was dropped: the decomposition looked valid with the light on."""
+    inner = Task("Inner", (Method("inner", (Lit("lit", "?rm"),), ("switch-off",)),))
+    twice = Task("Twice", (Method("twice", (), ("Inner", "Inner")),))
+    tree = GoalNode((TaskNode("Twice"), TaskNode("Wait")), annotation=("flat", ";"))
+    mission, exploratory, cpsat = _solve(_spec(tree, tasks=(inner, twice) + TASKS, lit=True), tmp_path)
+    assert [[s.name for s in p.actions] for p in mission.paths["Twice"]] == [["switch-off", "switch-off"]]
+    assert exploratory == cpsat == []
