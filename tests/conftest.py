@@ -24,3 +24,13 @@ def require_reference() -> Path:
 @pytest.fixture
 def reference() -> Path:
     return require_reference()
+
+
+@pytest.fixture
+def mission(tmp_path: Path) -> Path:
+    """A copy of the bundled item-delivery mission to change (without its output folder)."""
+    import shutil
+
+    folder = tmp_path / "mission"
+    shutil.copytree(ROOT / "examples" / "item-delivery", folder, ignore=shutil.ignore_patterns("output"))
+    return folder

@@ -13,12 +13,6 @@ from mutrose_cp.cli import main
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 
 
-@pytest.fixture
-def mission(tmp_path: Path) -> Path:
-    folder = tmp_path / "mission"
-    shutil.copytree(EXAMPLE, folder, ignore=shutil.ignore_patterns("output"))
-    return folder
-
 
 def _stale_copy(folder: Path, sub: str, name: str) -> Path:
     original = next(p for p in (folder / sub).iterdir() if p.is_file())

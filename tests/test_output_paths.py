@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import os
 import resource
-import shutil
 import stat
 import subprocess
 import sys
@@ -22,12 +21,6 @@ from mutrose_cp.output_file import atomic_writer
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 
-
-@pytest.fixture
-def mission(tmp_path: Path) -> Path:
-    folder = tmp_path / "mission"
-    shutil.copytree(EXAMPLE, folder, ignore=shutil.ignore_patterns("output"))
-    return folder
 
 
 def _only(folder: Path) -> Path:
@@ -48,7 +41,7 @@ def test_an_input_is_never_the_output(mission, capsys, which):
     victim = _only(mission / which)
     before = victim.read_bytes()
     assert main(["decompose", str(mission), "-q", "-o", str(victim)]) == 2
-    assert f"the output would overwrite the input" in capsys.readouterr().err
+    assert "the output would overwrite the input" in capsys.readouterr().err
     assert victim.read_bytes() == before
 
 

@@ -72,6 +72,15 @@ class InitialState:
             index.setdefault(key, value)
         return index
 
+    def fact_map(self) -> dict[tuple[str, tuple[str, ...]], bool]:
+        """Every known atom and its polarity (the first literal of an atom decides), a copy to
+        change as effects are applied."""
+        return dict(self._literal_index)
+
+    def value_map(self) -> dict[tuple[str, tuple[str, ...]], Number]:
+        """Every known function value (the first entry decides), a copy to change."""
+        return dict(self._function_index)
+
     def value_of(self, pred: str, args: tuple[str, ...] | list[str]) -> bool | None:
         """Polarity of the first literal ``pred(args)``; None when the atom is unknown."""
         return self._literal_index.get((pred, tuple(args)))

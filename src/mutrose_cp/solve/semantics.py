@@ -74,13 +74,7 @@ class State:
 
 def initial_state(initial: InitialState) -> State:
     """The initial world as a :class:`State` (the first entry of a repeated atom wins)."""
-    facts: dict[AtomKey, bool] = {}
-    for lit in initial.literals:
-        facts.setdefault((lit.predicate, lit.args), lit.positive)
-    values: dict[AtomKey, float] = {}
-    for key, value in initial.functions:
-        values.setdefault(key, value)
-    return State(facts, values)
+    return State(initial.fact_map(), dict(initial.value_map()))
 
 
 @dataclass(frozen=True)

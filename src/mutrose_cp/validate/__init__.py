@@ -35,7 +35,7 @@ from ..io.config import Configuration
 from ..io.decomposition_output import DecompositionOutput, OutputTask
 from ..io.expressions import Annotation, AnnotationLeaf, Atom, BoolOp, Condition
 from ..io.goal_model import GMNode, GoalModel
-from ..io.hddl import Comparison, Domain, Literal
+from ..io.hddl import Domain, Literal
 from ..world import InitialState
 from .htn_match import Matcher, Step
 
@@ -82,13 +82,7 @@ class State:
 
     @classmethod
     def initial(cls, initial: InitialState) -> "State":
-        facts: dict[AtomKey, bool] = {}
-        for lit in initial.literals:
-            facts.setdefault((lit.predicate, lit.args), lit.positive)
-        values: dict[AtomKey, float] = {}
-        for key, value in initial.functions:
-            values.setdefault(key, value)
-        return cls(facts, values)
+        return cls(initial.fact_map(), dict(initial.value_map()))
 
     def copy(self) -> "State":
         return State(dict(self.facts), dict(self.values))
