@@ -183,6 +183,8 @@ class _Validator:
         self.rank = self._execution_rank()
         self._replays: dict[str, tuple[TaskEffects, list[str]] | None] = {}
         self._noted: set[str] = set()
+        self._before: dict[str, set[str]] = {}  # per task, what the constraints put before it
+        self._after: dict[str, set[str]] = {}
 
     def _execution_rank(self) -> dict[str, tuple[int, int]]:
         """A sort key that lists tasks in an order the SEQ and FB constraints allow (across tasks
@@ -359,7 +361,9 @@ class _Validator:
         """Chosen tasks that the SEQ and FB constraints put before ``key``, in execution order,
         without the alternatives a fallback replaces (they failed when ``key`` runs)."""
         task = self.out.tasks[key]
-        before = nx.ancestors(self.seq_fb, key) & chosen
+        if key not in self._before:
+            self._before[key] = nx.ancestors(self.seq_fb, key)
+        before = self._before[key] & chosen
         return sorted((p for p in before if self._relation(self.out.tasks[p], task) != "FALLBACK"),
                       key=self.rank.__getitem__)
 
@@ -457,19 +461,32 @@ class _Validator:
 
     # -- parallel conflicts ------------------------------------------------------------------------
     def _conflicts(self, i: int, keys: list[str], errors: list[Violation]) -> None:
-        for a, b in itertools.combinations(sorted(keys, key=self.order.__getitem__), 2):
-            if self._relation(self.out.tasks[a], self.out.tasks[b]) != "#":
-                continue
-            if nx.has_path(self.seq_fb, a, b) or nx.has_path(self.seq_fb, b, a):
-                continue  # ordered after all (a context dependency)
-            ra, rb = self._replays.get(a), self._replays.get(b)
-            if ra is None or rb is None:
-                continue
-            for atom, value in ra[0].facts.items():
-                if rb[0].facts.get(atom, value) != value:
-                    errors.append(Violation(i, self.out.tasks[a].id, f"parallel tasks {self.out.tasks[a].id} and "
-                                            f"{self.out.tasks[b].id} set {_show_literal(atom[0], atom[1], True)} "
-                                            "both true and false"))
+        """Only the pairs that set some fact both ways are examined (indexed by fact), so a
+        decomposition of thousands of tasks is checked in time linear in its effects."""
+        writers: dict[AtomKey, tuple[list[str], list[str]]] = {}
+        for k in sorted(keys, key=self.order.__getitem__):
+            replay = self._replays.get(k)
+            if replay is not None:
+                for atom, value in replay[0].facts.items():
+                    writers.setdefault(atom, ([], []))[0 if value else 1].append(k)
+        reported: set[tuple[str, str]] = set()
+        for atom, (setting, clearing) in writers.items():
+            for a, b in itertools.product(setting, clearing):
+                a, b = sorted((a, b), key=self.order.__getitem__)
+                if (a, b) in reported or self._relation(self.out.tasks[a], self.out.tasks[b]) != "#":
+                    continue
+                if b in self._descendants(a) or a in self._descendants(b):
+                    continue  # ordered after all (a context dependency)
+                reported.add((a, b))
+                errors.append(Violation(i, self.out.tasks[a].id, f"parallel tasks {self.out.tasks[a].id} and "
+                                        f"{self.out.tasks[b].id} set {_show_literal(atom[0], atom[1], True)} "
+                                        "both true and false"))
+
+    def _descendants(self, key: str) -> set[str]:
+        """Tasks the SEQ and FB constraints put after ``key`` (the graph never changes)."""
+        if key not in self._after:
+            self._after[key] = nx.descendants(self.seq_fb, key)
+        return self._after[key]
 
     # -- contexts and achieve conditions ---------------------------------------------------------
     def _binding(self, task: OutputTask) -> dict[str, tuple[str, ...]]:
