@@ -1,0 +1,145 @@
+"""Mission constraints (``constraints.py``, spec ``semantics.md`` §6) of small generated
+missions: SEQ/FB pairs between a task and a nested fallback or sequence, parallel pairs that a
+context dependency orders, trimming, EC flags, and the robot-number check of EC partners.
+
+Every task sits below its own means-end goal, so that the trimmed Task Graph keeps the
+annotation's order (a kept operator lists its *direct* tasks first, §5.5)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from mutrose_cp.constraints import generate_constraints
+from mutrose_cp.errors import MissionError
+from mutrose_cp.mission import Mission
+
+from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission
+
+ACTIONS = (Action("act1", (), ()), Action("act2", (), (Lit("lit", "?rm"),)))
+
+
+def _task(name: str, *actions: str) -> Task:
+    return Task(name, tuple(Method(f"m{name[-1]}{k}", (), (a,)) for k, a in enumerate(actions)))
+
+
+def _spec(tree: GoalNode, *tasks: Task) -> MissionSpec:
+    tasks = tasks or (_task("TaskA", "act1"),)
+    room = Room("Room1", True, (("lit", False),), 0)
+    return MissionSpec(("lit",), ("charged",), ACTIONS, tasks, (room,), True, "", tree)
+
+
+def _leaf(task: str = "TaskA") -> GoalNode:
+    return GoalNode((TaskNode(task),))
+
+
+def _constraints(mission: Mission) -> list[tuple[str, str, str]]:
+    """(kind, first, second) over decomposition ids, in the generated order."""
+    tg = mission.task_graph
+    return [(c.kind, tg.vertices[c.first].content, tg.vertices[c.second].content) for c in mission.constraints]
+
+
+def _annotated(annotation, n: int) -> Mission:
+    return load_mission(_spec(GoalNode(tuple(_leaf() for _ in range(n)), annotation=annotation)))
+
+
+# ---------------------------------------------------------------------------------------------
+# SEQ / FB generation (§6.1) and trimming (§6.4)
+
+
+def test_sequence_of_three():
+    """G4;G5;G6: consecutive pairs only."""
+    assert _constraints(_annotated(("flat", ";"), 3)) == [
+        ("SEQ", "AT1_1|1", "AT2_1|1"), ("SEQ", "AT2_1|1", "AT3_1|1")]
+
+
+def test_fallback_to_a_sequence_reaches_both_of_its_tasks():
+    """FALLBACK(G4, G5;G6): a task falls back to a SEQ subtree through both endpoints."""
+    assert sorted(_constraints(_annotated(("FALLBACK", 0, (";", 1, 2)), 3))) == [
+        ("FB", "AT1_1|1", "AT2_1|1"), ("FB", "AT1_1|1", "AT3_1|1"), ("SEQ", "AT2_1|1", "AT3_1|1")]
+
+
+def test_sequence_after_a_fallback_follows_both_of_its_tasks():
+    """(FALLBACK(G4,G5));G6: whichever of G4/G5 runs, G6 comes after it."""
+    assert sorted(_constraints(_annotated((";", ("FALLBACK", 0, 1), 2), 3))) == [
+        ("FB", "AT1_1|1", "AT2_1|1"), ("SEQ", "AT1_1|1", "AT3_1|1"), ("SEQ", "AT2_1|1", "AT3_1|1")]
+
+
+def test_sequence_from_a_fallback_to_a_parallel_pair():
+    """(FALLBACK(G4,G5));(G6#G7): all four endpoint pairs are SEQ."""
+    assert sorted(_constraints(_annotated((";", ("FALLBACK", 0, 1), ("#", 2, 3)), 4))) == [
+        ("FB", "AT1_1|1", "AT2_1|1"),
+        ("SEQ", "AT1_1|1", "AT3_1|1"), ("SEQ", "AT1_1|1", "AT4_1|1"),
+        ("SEQ", "AT2_1|1", "AT3_1|1"), ("SEQ", "AT2_1|1", "AT4_1|1"),
+    ]
+
+
+def test_sequence_after_a_parallel_operator_is_trimmed():
+    """((G4;G5)#G6);G7: G7 follows every endpoint of the parallel subtree, but SEQ (AT1, AT4) is
+    implied by SEQ (AT1, AT2) and SEQ (AT2, AT4) and trimmed (§6.4)."""
+    found = _constraints(_annotated((";", ("#", (";", 0, 1), 2), 3), 4))
+    assert sorted(found) == [
+        ("SEQ", "AT1_1|1", "AT2_1|1"), ("SEQ", "AT2_1|1", "AT4_1|1"), ("SEQ", "AT3_1|1", "AT4_1|1")]
+
+
+def test_constraints_span_every_decomposition_pair():
+    """TaskB has two methods: SEQ and FB link every decomposition of one task to every one of
+    the other."""
+    tree = GoalNode((_leaf("TaskA"), _leaf("TaskB"), _leaf("TaskA")), annotation=(";", 0, ("FALLBACK", 1, 2)))
+    mission = load_mission(_spec(tree, _task("TaskA", "act1"), _task("TaskB", "act1", "act1")))
+    assert sorted(_constraints(mission)) == [
+        ("FB", "AT2_1|1", "AT3_1|1"), ("FB", "AT2_1|2", "AT3_1|1"),
+        ("SEQ", "AT1_1|1", "AT2_1|1"), ("SEQ", "AT1_1|1", "AT2_1|2"),
+    ]
+
+
+def test_context_dependency_orders_any_parallel_pair():
+    """G4 # G5 # G6 where G6's context (``is_lit``) is false but AT1 lights the room: the
+    non-adjacent parallel pair (AT1, AT3) becomes SEQ; the other parallel pairs vanish."""
+    g6 = GoalNode((TaskNode("TaskC"),), condition="current_room.is_lit")
+    tree = GoalNode((_leaf("TaskA"), _leaf("TaskB"), g6), annotation=("flat", "#"))
+    mission = load_mission(_spec(tree, _task("TaskA", "act2"), _task("TaskB", "act1"), _task("TaskC", "act1")))
+    assert _constraints(mission) == [("SEQ", "AT1_1|1", "AT3_1|1")]
+    assert generate_constraints(mission.task_graph) == mission.constraints
+
+
+# ---------------------------------------------------------------------------------------------
+# Execution constraints and robot numbers (§6.3, §6.5)
+
+
+def test_execution_constraint_flags():
+    for group, divisible in ((False, True), (True, False)):
+        tree = GoalNode((_leaf(), _leaf()), annotation=("flat", "#"), group=group, divisible=divisible)
+        mission = load_mission(_spec(tree))
+        assert [(c.kind, c.group, c.divisible) for c in mission.constraints] == [("EC", group, divisible)]
+
+
+def _robot_numbers(tmp_path: Path, first: str, second: str) -> Mission:
+    """AT1 # AT2 below a Divisible=False goal (the tasks share robots), with RobotNumber values."""
+    tree = GoalNode((TaskNode("TaskA"), TaskNode("TaskA")), annotation=("flat", "#"), divisible=False)
+    hddl, gm, config = _spec(tree).write(tmp_path)
+    doc = json.loads(gm.read_text())
+    for node in doc["actors"][0]["nodes"]:
+        if node["text"].startswith("AT1:"):
+            node["customProperties"]["RobotNumber"] = first
+        elif node["text"].startswith("AT2:"):
+            node["customProperties"]["RobotNumber"] = second
+    gm.write_text(json.dumps(doc))
+    return Mission.load(hddl, gm, config)
+
+
+@pytest.mark.parametrize("first, second, ok", [
+    ("2", "2", True), ("2", "3", False), ("3", "2", False),  # fixed/fixed: equal
+    ("3", "[2,4]", True), ("[2,4]", "3", True), ("1", "[2,4]", False), ("[2,4]", "5", False),  # fixed in range
+    ("[1,2]", "[2,3]", True), ("[2,3]", "[1,2]", True), ("[1,2]", "[3,4]", False), ("[3,4]", "[1,2]", False),
+])
+def test_robot_numbers_of_execution_constrained_tasks(tmp_path, first, second, ok):
+    mission = _robot_numbers(tmp_path, first, second)
+    if ok:
+        assert [c.kind for c in mission.constraints] == ["EC"]
+        assert mission.decomposition_space().count == 1
+    else:
+        with pytest.raises(MissionError, match=r"Wrong robot number for execution constrained tasks "
+                                               r"\[AT1_1\|1\] and \[AT2_1\|1\]"):
+            _ = mission.constraints

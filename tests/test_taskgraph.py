@@ -1,0 +1,152 @@
+"""The Task Graph (``taskgraph.py``) on small generated missions: trimming keeps an achieve
+goal's operator, context conditions searched through sequences, parallel operators and
+fallbacks, execution-constraint flags of nested Group/Divisible goals, and the robot number of
+Group=False tasks."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from mutrose_cp.errors import MissionError, NoDecompositionError
+from mutrose_cp.mission import Mission
+from mutrose_cp.taskgraph import CD, EC, OP
+
+from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission
+
+ACTIONS = (Action("act0", (), (Lit("clean", "?rm"),)), Action("act1", (), ()), Action("act2", (), (Lit("lit", "?rm"),)))
+
+
+def _task(name: str, action: str) -> Task:
+    return Task(name, (Method(f"m{name[-1]}0", (), (action,)),))
+
+
+def _spec(tree: GoalNode, *tasks: Task, forall: str = "") -> MissionSpec:
+    """One room, neither clean nor lit."""
+    room = Room("Room1", True, (("clean", False), ("lit", False)), 0)
+    return MissionSpec(("clean", "lit"), ("charged",), ACTIONS, tasks, (room,), True, forall, tree)
+
+
+def _count(mission: Mission) -> int:
+    """Valid mission decompositions, the same number by both algorithms."""
+    count = mission.decomposition_space().count
+    try:
+        explored = len(mission.exploratory())
+    except NoDecompositionError:
+        explored = 0
+    assert explored == count
+    return count
+
+
+def _cd_edges(mission: Mission) -> list[tuple[str, str]]:
+    tg = mission.task_graph
+    return sorted((tg.vertices[a].content, tg.vertices[b].content) for a, b, d in tg.edges() if d["type"] == CD)
+
+
+def _ecs(mission: Mission) -> set[tuple[str, str, bool, bool]]:
+    tg = mission.task_graph
+    return {(tg.vertices[c.first].content, tg.vertices[c.second].content, c.group, c.divisible)
+            for c in mission.constraints if c.kind == EC}
+
+
+# ---------------------------------------------------------------------------------------------
+# Trimming
+
+
+@pytest.mark.parametrize("cleans", [True, False])
+def test_achieve_goal_left_with_one_child_keeps_its_operator(cleans):
+    """G4 (Achieve ``is_clean``) is [G5;AT2], but G5's context (``is_lit``) is false and nothing
+    lights the room, so G5 disappears.  G4's operator then has a single child; it is kept anyway
+    because its achieve condition must still be checked."""
+    g5 = GoalNode((TaskNode("TaskA"),), condition="current_room.is_lit")
+    g4 = GoalNode((g5, TaskNode("TaskB")), annotation=("flat", ";"), achieve="current_room.is_clean")
+    tree = GoalNode((g4, TaskNode("TaskC")), annotation=("flat", "#"))
+    mission = load_mission(_spec(tree, _task("TaskA", "act1"), _task("TaskB", "act0" if cleans else "act1"),
+                                 _task("TaskC", "act1")))
+    tg = mission.task_graph
+    assert sorted(v.content for v in tg.tasks()) == ["AT2_1", "AT3_1"]
+    achieve_ops = [v for v in tg.vertices if v.kind == OP and v.is_achieve_type]
+    assert ("G4", 1) in [(v.achieve_goal, len(tg.children(v.index))) for v in achieve_ops]
+    assert _count(mission) == (1 if cleans else 0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Context conditions (AT1 lights the room; G5 over AT2 needs it lit)
+
+
+@pytest.mark.parametrize("op, tasks, cd", [
+    (";", ["AT1_1", "AT2_1"], []),  # a sequence satisfies the context silently
+    ("#", ["AT1_1", "AT2_1"], [("AT1_1|1", "AT2_1")]),  # a parallel task becomes a context dependency
+    ("FALLBACK", ["AT1_1"], []),  # a fallback's first branch does not enable the second: G5 disappears
+], ids=["sequence", "parallel", "fallback"])
+def test_false_context_searched_through_the_operator(op, tasks, cd):
+    g5 = GoalNode((TaskNode("TaskB"),), condition="current_room.is_lit")
+    tree = GoalNode((TaskNode("TaskA"), g5), annotation=("flat", op))
+    mission = load_mission(_spec(tree, _task("TaskA", "act2"), _task("TaskB", "act1")))
+    assert sorted(v.content for v in mission.task_graph.tasks()) == tasks
+    assert _cd_edges(mission) == cd
+    assert _count(mission) == 1
+
+
+def test_context_dependency_orders_parallel_tasks():
+    """The CD edge of AT1 # G5 turns the parallel pair into SEQ; without it there is none."""
+    g5 = GoalNode((TaskNode("TaskB"),), condition="current_room.is_lit")
+    tree = GoalNode((TaskNode("TaskA"), g5), annotation=("flat", "#"))
+    mission = load_mission(_spec(tree, _task("TaskA", "act2"), _task("TaskB", "act1")))
+    tg = mission.task_graph
+    kinds = sorted((c.kind, tg.vertices[c.first].content, tg.vertices[c.second].content) for c in mission.constraints)
+    assert kinds == [("SEQ", "AT1_1|1", "AT2_1|1")]
+
+
+# ---------------------------------------------------------------------------------------------
+# Execution constraints of nested Group/Divisible goals
+#
+# G3 is [G4;AT3] and G4 is [AT1#AT2].
+
+
+def _nested(outer: tuple[bool, bool], inner: tuple[bool, bool]) -> Mission:
+    g4 = GoalNode((TaskNode("TaskA"), TaskNode("TaskA")), annotation=("flat", "#"), group=inner[0], divisible=inner[1])
+    tree = GoalNode((g4, TaskNode("TaskA")), annotation=("flat", ";"), group=outer[0], divisible=outer[1])
+    return load_mission(_spec(tree, _task("TaskA", "act1")))
+
+
+def test_group_false_inside_divisible_false_takes_over():
+    """Below a Divisible=False goal (group True) a nested Group=False goal starts its own
+    execution constraints: AT1-AT2 carry group False, the pairs with AT3 the outer flags."""
+    assert _ecs(_nested((True, False), (False, True))) == {
+        ("AT1_1|1", "AT2_1|1", False, True),
+        ("AT3_1|1", "AT1_1|1", True, False),
+        ("AT3_1|1", "AT2_1|1", True, False),
+    }
+
+
+def test_divisible_false_inside_group_false_keeps_the_outer_flags():
+    """Below a Group=False goal nothing nested takes over: every pair carries group False."""
+    assert _ecs(_nested((False, True), (True, False))) == {
+        ("AT1_1|1", "AT2_1|1", False, True),
+        ("AT3_1|1", "AT1_1|1", False, True),
+        ("AT3_1|1", "AT2_1|1", False, True),
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# Robot number of Group=False tasks
+
+
+@pytest.mark.parametrize("robots, ok", [("1", True), ("2", False), ("[1,2]", False)])
+def test_group_false_tasks_need_exactly_one_robot(tmp_path: Path, robots, ok):
+    tree = GoalNode((TaskNode("TaskA"), TaskNode("TaskA")), annotation=("flat", "#"), group=False)
+    hddl, gm, config = _spec(tree, _task("TaskA", "act1")).write(tmp_path)
+    doc = json.loads(gm.read_text())
+    for node in doc["actors"][0]["nodes"]:
+        if node["text"].startswith("AT1:"):
+            node["customProperties"]["RobotNumber"] = robots
+    gm.write_text(json.dumps(doc))
+    mission = Mission.load(hddl, gm, config)
+    if ok:
+        assert [v.content for v in mission.task_graph.tasks()] == ["AT1_1", "AT2_1"]
+        assert _count(mission) == 1
+    else:
+        with pytest.raises(MissionError, match=r"Non group task \[AT1_1\] does not have 1 robot"):
+            _ = mission.task_graph
