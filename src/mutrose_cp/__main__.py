@@ -1,6 +1,4 @@
 """Allow ``python -m mutrose_cp``."""
-import sys
+from .cli import entry
 
-from .cli import main
-
-sys.exit(main())
+entry()

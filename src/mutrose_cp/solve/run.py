@@ -11,6 +11,7 @@ search early and report the partial enumeration as a normal status.
 """
 from __future__ import annotations
 
+import signal
 import threading
 from typing import Iterable
 
@@ -23,6 +24,19 @@ class IncompleteSolveError(MissionError):
     """CP-SAT stopped before it finished; no result is reported (exit status 4)."""
 
     exit_code = 4
+
+
+def _stop(solver: cp_model.CpSolver, worker: threading.Thread) -> None:
+    """Stop the search and wait for the worker, with further signals held back meanwhile: a
+    solver thread still running when the interpreter exits aborts the process.  The stop is
+    repeated until the worker ends, in case the search had not started when it was first asked."""
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        while worker.is_alive():
+            solver.StopSearch()
+            worker.join(0.05)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def run_solver(model: cp_model.CpModel, *, accept: Iterable[int], callback: cp_model.CpSolverSolutionCallback | None = None,
@@ -42,13 +56,12 @@ def run_solver(model: cp_model.CpModel, *, accept: Iterable[int], callback: cp_m
             result["error"] = exc
 
     worker = threading.Thread(target=work, name="cp-sat", daemon=True)
-    worker.start()
     try:
+        worker.start()
         while worker.is_alive():
             worker.join(0.05)
     except BaseException:
-        solver.StopSearch()
-        worker.join()
+        _stop(solver, worker)
         raise
     if "error" in result:
         raise result["error"]  # type: ignore[misc]
