@@ -83,3 +83,12 @@ def test_plain_world_numbers_are_not_warned(tmp_path, capsys):
 
     assert main(["check", str(require_reference() / "missions" / "object-picking-function")]) == 0
     assert "is read as" not in capsys.readouterr().err
+
+
+def test_the_command_line_leaves_the_interpreter_as_it_found_it(tmp_path):
+    import gc
+    import sys
+
+    digits, recursion, collecting = sys.get_int_max_str_digits(), sys.getrecursionlimit(), gc.isenabled()
+    assert main(["count", str(EXAMPLE), "-q"]) == 0
+    assert (sys.get_int_max_str_digits(), sys.getrecursionlimit(), gc.isenabled()) == (digits, recursion, collecting)

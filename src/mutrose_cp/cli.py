@@ -496,9 +496,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     # run time on large missions.  A command is short-lived: the collector is paused meanwhile.
     collecting = gc.isenabled()
     gc.disable()
+    # exact counts are big integers (3^10000 has 4772 digits, over Python's default limit for
+    # converting an int to text); the limit is restored for an embedding program
+    digits = sys.get_int_max_str_digits()
+    sys.set_int_max_str_digits(0)
     try:
         return _main(argv)
     finally:
+        sys.set_int_max_str_digits(digits)
         if collecting:
             gc.enable()
 
@@ -515,9 +520,6 @@ def _usable_stderr() -> None:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    # exact counts are big integers (3^10000 has 4772 digits, over Python's default limit for
-    # converting an int to text)
-    sys.set_int_max_str_digits(0)
     _usable_stderr()
     if hasattr(signal, "SIGXFSZ"):
         # over a file-size limit, a write fails with EFBIG (a located error) instead of the
