@@ -15,7 +15,6 @@ from .io.config import Configuration
 from .io.expressions import Atom, BoolOp, Condition
 from .query import Binding
 
-Atom_ = tuple[str, tuple[str, ...]]
 
 
 @dataclass(frozen=True)

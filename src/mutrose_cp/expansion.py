@@ -11,7 +11,7 @@ original does; nested operators of one annotation belong to the same goal and sh
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Mapping
 
 from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
@@ -67,7 +67,6 @@ class Expansion:
     instances: list[TaskInstance]
     rat: RatNode
     bindings: dict[str, Binding]  # global variable values after the walk (last forAll element)
-    forall_goals: dict[str, GMNode] = field(default_factory=dict)
 
 
 def record_id(record, unique_id: str) -> str:
@@ -273,5 +272,4 @@ def expand(gm: GoalModel, domain: Domain, config: Configuration, world: WorldKno
     (``progress`` is told how many instances of the outermost forAll are done)."""
     walker = _Walker(gm, domain, config, world, progress)
     rat = walker.walk(gm.node(gm.root), 0)
-    forall = {n.id: n for n in gm.nodes if n.forall is not None}
-    return Expansion(walker.instances, rat, walker.bindings, forall)
+    return Expansion(walker.instances, rat, walker.bindings)

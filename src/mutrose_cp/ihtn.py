@@ -53,7 +53,6 @@ class _Agents:
         self.domain = model.domain
         config = model.config
         self.location_hddl = {config.type_mapping[t] for t in config.location_types if t in config.type_mapping}
-        self.locations = set(config.location_types)
         self.display: dict[str, str] = {}
         # per decomposition vertex: parameter -> agent internal names (unbound robots), and values
         self.robot_agents: dict[int, dict[str, list[str]]] = {}

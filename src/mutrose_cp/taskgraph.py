@@ -11,7 +11,6 @@ import copy
 from dataclasses import dataclass, field
 from typing import Iterator, Mapping
 
-import networkx as nx
 
 from .annotation_tree import GOAL, MEANSEND, TASK, RatNode
 from .conditions import Test, holds, translate
@@ -121,16 +120,6 @@ class TaskGraph:
                 yield a, b, self._edges[(a, b)]
             for b, group, divisible in self._ec.get(a, ()):
                 yield a, b, {"type": EC, "group": group, "divisible": divisible}
-
-    @property
-    def graph(self) -> nx.DiGraph:
-        """The Task Graph as a networkx ``DiGraph`` (vertex attribute ``vertex``, edge ``type``)."""
-        g = nx.DiGraph()
-        for v in self.vertices:
-            g.add_node(v.index, vertex=v)
-        for a, b, d in self.edges():
-            g.add_edge(a, b, **d)
-        return g
 
     def out(self, v: int, *kinds: str) -> list[int]:
         """Successors of ``v`` through edges of the given types, in insertion order."""

@@ -227,11 +227,6 @@ def parse_tolerant_xml(data: bytes | str, source: str, what: str, *, lenient: bo
 # Value helpers (C++ stream semantics of the original)
 
 
-def is_element(node: object) -> bool:
-    """True for real elements (comments and processing instructions have a non-string tag)."""
-    return isinstance(getattr(node, "tag", None), str)
-
-
 def element_children(el: etree._Element) -> Iterator[etree._Element]:
     """Element children in document order, skipping comments and PIs (the original stores them
     as pseudo-children that never match a type name)."""
