@@ -7,10 +7,9 @@ once, and robot numbers can be inferred.  Every problem is collected, none stops
 """
 from __future__ import annotations
 
-import difflib
 from typing import Iterable
 
-from .errors import Problem
+from .errors import Problem, closest
 from .io.config import Configuration
 from .io.goal_model import GMNode, GoalModel
 from .io.hddl import Domain
@@ -23,8 +22,8 @@ def _where_node(gm: GoalModel, node: GMNode) -> str:
 
 def _did_you_mean(name: str, candidates: Iterable[str], lead: str = "; did you mean ") -> str:
     """``; did you mean X?`` (or ``lead`` X?) for a close candidate, else nothing."""
-    close = difflib.get_close_matches(name, list(dict.fromkeys(candidates)), n=1, cutoff=0.75)
-    return f"{lead}{close[0]}?" if close else ""
+    close = closest(name, candidates)
+    return f"{lead}{close}?" if close else ""
 
 
 def check_config(domain: Domain, gm: GoalModel, config: Configuration) -> list[Problem]:

@@ -13,6 +13,7 @@ from typing import Callable, Mapping
 from .errors import MissionError
 from .io.config import Configuration
 from .io.expressions import Atom, BoolOp, Condition
+from .io.knowledge import base_type
 from .query import Binding
 
 
@@ -51,10 +52,6 @@ Test = FactTest | ValueTest | AllOf | AnyOf
 _NUMERIC_OPS = ("=", "<>", ">", "<", ">=", "<=")
 
 
-def _base(type_: str) -> str:
-    return type_[type_.index("(") + 1 : type_.index(")")] if "(" in type_ and ")" in type_ else type_
-
-
 def translate(
     condition: Condition | None, bindings: Mapping[str, Binding], config: Configuration, where: str
 ) -> Test:
@@ -69,7 +66,7 @@ def translate(
 
 def _atom(atom: Atom, bindings: Mapping[str, Binding], config: Configuration, where: str) -> Test:
     binding = bindings.get(atom.variable)
-    relates = _base(binding.type) if binding is not None else ""
+    relates = base_type(binding.type) if binding is not None else ""
     values = () if binding is None else (binding.value if isinstance(binding.value, tuple) else (binding.value,))
     numeric = atom.op in _NUMERIC_OPS
     wanted = "function" if numeric else "predicate"

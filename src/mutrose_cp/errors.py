@@ -7,6 +7,7 @@ message and an exit status, never a traceback.
 """
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 from typing import Iterable
 
@@ -47,6 +48,15 @@ class NoDecompositionError(MissionError):
     """The mission is well-formed but has no valid mission decomposition (exit status 3)."""
 
     exit_code = 3
+
+
+def closest(name: str, candidates: Iterable[str], cutoff: float = 0.75) -> str | None:
+    """The candidate closest to a misspelt ``name``, if one is close enough (for "did you mean").
+
+    0.75 suits identifiers; short keys and type names, where one wrong letter is a larger
+    share, use 0.6."""
+    close = difflib.get_close_matches(name, list(dict.fromkeys(candidates)), n=1, cutoff=cutoff)
+    return close[0] if close else None
 
 
 def located(file: str, line: int | None = None, column: int | None = None) -> str:

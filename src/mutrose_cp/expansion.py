@@ -20,7 +20,7 @@ from .io.config import Configuration
 from .io.expressions import Annotation, AnnotationLeaf, AnnotationOp
 from .io.goal_model import GMNode, GoalModel, RobotNumber
 from .io.hddl import Domain
-from .io.knowledge import WorldKnowledge
+from .io.knowledge import WorldKnowledge, record_id
 from .query import Binding, run_select
 
 Value = str | tuple[str, ...]
@@ -67,12 +67,6 @@ class Expansion:
     instances: list[TaskInstance]
     rat: RatNode
     bindings: dict[str, Binding]  # global variable values after the walk (last forAll element)
-
-
-def record_id(record, unique_id: str) -> str:
-    """A world record's unique id (text of its ``unique_id`` child)."""
-    el = record.find(unique_id)
-    return (el.text or "") if el is not None else ""
 
 
 def infer_robot_number(domain: Domain, task_name: str) -> RobotNumber:
@@ -144,7 +138,7 @@ class _Walker:
             raise MissionError([Problem(self._where(node), p.message) if p.where in ("", node.id) else p
                                 for p in err.problems]) from None
         var = node.controls[0]
-        ids = tuple(record_id(r, self.world.unique_id) for r in records)
+        ids = tuple(record_id(r, self.world.unique_id) or "" for r in records)
         if var.is_collection:
             self._bind(var.name, Binding(ids, var.type, tuple(records)))
         else:

@@ -5,7 +5,6 @@ Every key the original reads is kept; problems are located by key path
 """
 from __future__ import annotations
 
-import difflib
 import json
 import os
 from dataclasses import dataclass
@@ -14,7 +13,7 @@ from typing import Any
 
 from lxml import etree
 
-from ..errors import MissionError, Problem, located
+from ..errors import MissionError, Problem, closest, located
 from .knowledge import (
     element_children,
     hinted,
@@ -470,11 +469,11 @@ class _Builder:
                 fields["attribute_name"] = req("attribute_name")
             fields["belongs_to"] = req("belongs_to")
         else:
-            close = difflib.get_close_matches(kind, SEMANTIC_TYPES, n=1, cutoff=0.6)
+            close = closest(kind, SEMANTIC_TYPES, cutoff=0.6)
             self.problem(
                 f"{path}.type",
                 f"No mapping type [{kind_raw}] for semantic mappings.",
-                (f"Did you mean {close[0]}? " if close else "")
+                (f"Did you mean {close}? " if close else "")
                 + f"Set {path}.type to attribute (a field of a record), ownership (records listed "
                 "inside another record) or relationship (records related to another record).",
             )

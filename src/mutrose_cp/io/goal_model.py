@@ -6,7 +6,6 @@ custom property, and parses the embedded expressions.  Problems are collected pe
 """
 from __future__ import annotations
 
-import difflib
 import json
 import math
 import os
@@ -15,7 +14,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Callable, TypeVar
 
-from ..errors import MissionError, Problem
+from ..errors import MissionError, Problem, closest
 from .expressions import (
     FORALL_HINT,
     SELECT_HINT,
@@ -28,7 +27,7 @@ from .expressions import (
     parse_node_text,
     parse_select,
 )
-from .knowledge import hinted, json_depth_problem, json_syntax_problem
+from .knowledge import base_type, hinted, json_depth_problem, json_syntax_problem
 from .text import decode_utf8, read_bytes
 
 
@@ -45,9 +44,7 @@ class VarDecl:
 
     @property
     def base_type(self) -> str:
-        if "(" in self.type and ")" in self.type:
-            return self.type[self.type.index("(") + 1 : self.type.index(")")]
-        return self.type
+        return base_type(self.type)
 
 
 @dataclass(frozen=True)
@@ -289,10 +286,10 @@ def parse_params(value: str) -> tuple[str, ...]:
 def _property_hint(key: str) -> str:
     """How to fix an unknown custom property: the closest known key, and the list."""
     by_lower = {k.lower(): k for k in KNOWN_PROPERTIES}
-    close = difflib.get_close_matches(key.lower(), list(by_lower), n=1, cutoff=0.6)
+    close = closest(key.lower(), by_lower, cutoff=0.6)
     known = ", ".join(sorted(KNOWN_PROPERTIES))
     if close:
-        return f"Did you mean {by_lower[close[0]]}? Keys are case-sensitive; the known keys are {known}."
+        return f"Did you mean {by_lower[close]}? Keys are case-sensitive; the known keys are {known}."
     return f"Remove it or use one of the known (case-sensitive) keys: {known}."
 
 

@@ -6,7 +6,6 @@ Syntax errors and static domain errors (undeclared predicates or subtasks, arity
 """
 from __future__ import annotations
 
-import difflib
 import os
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -16,7 +15,7 @@ from typing import Iterable
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
-from ..errors import MissionError, Problem, located
+from ..errors import MissionError, Problem, closest, located
 from .text import decode_utf8, read_bytes
 
 # ---------------------------------------------------------------------------------------------
@@ -268,12 +267,6 @@ def _deepest_paren(text: str) -> tuple[int, int, int]:
             elif char == ")":
                 depth -= 1
     return at[0], at[1], deepest
-
-
-def _closest(name: str, candidates: Iterable[str]) -> str | None:
-    """The declared name closest to a misspelt ``name``, if one is close enough."""
-    close = difflib.get_close_matches(name, list(dict.fromkeys(candidates)), n=1, cutoff=0.75)
-    return close[0] if close else None
 
 
 def _signature(name: str, parameters: Iterable[Parameter]) -> str:
@@ -631,7 +624,7 @@ class _DomainReader:
     def _check_callee(self, callee: Token, arity: int, body: _Body) -> None:
         declared = self.tasks.get(callee.value) or self.actions.get(callee.value)
         if declared is None:
-            close = _closest(callee.value, [*self.tasks, *self.actions])
+            close = closest(callee.value, [*self.tasks, *self.actions])
             self._error(
                 callee,
                 f"There is no declaration of the subtask {callee.value} (method '{body.name}'): "
@@ -680,7 +673,7 @@ class _DomainReader:
         matching = [d for d in declarations if d.name == name.value]
         if not matching:
             message = f"undeclared {what} '{name.value}' in the {clause} of {body.kind} '{body.name}'"
-            close = _closest(name.value, (d.name for d in declarations))
+            close = closest(name.value, (d.name for d in declarations))
             if close is not None:
                 section = ":predicates" if what == "predicate" else ":functions"
                 message += f": did you mean '{close}'? If not, declare it in ({section} ...)"
