@@ -64,7 +64,7 @@ class Fragment:
 
 
 @dataclass(frozen=True)
-class Path:
+class DecompositionPath:
     """One decomposition path of an abstract task."""
 
     steps: tuple[Step, ...]
@@ -435,19 +435,19 @@ class _PathGenerator:
         return out
 
 
-def task_paths(domain: Domain, task: str) -> list[Path]:
+def task_paths(domain: Domain, task: str) -> list[DecompositionPath]:
     """The decomposition paths of abstract ``task`` in decomposition-number order."""
     tdg = _TDG(domain, task)
     gen = _PathGenerator(domain, tdg)
     root = domain.task_by_name[task]
     identity = {p.name: p.name for p in root.parameters}
     return [
-        Path(tuple(p.steps), p.trees[0], tuple(sorted(p.fragments, key=lambda f: f.start)))
+        DecompositionPath(tuple(p.steps), p.trees[0], tuple(sorted(p.fragments, key=lambda f: f.start)))
         for p in gen.task_paths(tdg.root.id, _State(), identity, 0)
     ]
 
 
-def all_task_paths(domain: Domain) -> dict[str, list[Path]]:
+def all_task_paths(domain: Domain) -> dict[str, list[DecompositionPath]]:
     """Paths of every abstract task of the domain (used or not, as the original does)."""
     return {t.name: task_paths(domain, t.name) for t in domain.tasks}
 
@@ -493,7 +493,7 @@ def _groundings(args: tuple[str, ...], binding: Mapping[str, Value]) -> list[tup
     return [tuple(c) for c in itertools.product(*choices)]
 
 
-def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
+def ground_path(path: DecompositionPath, binding: Mapping[str, Value]) -> GroundPredicates:
     """Instantiate a path with an instance's parameter values (root parameter -> value)."""
     pre: list[Literal | Comparison] = []
     # net effects in declaration order: a later effect on an atom replaces the earlier one in
@@ -568,7 +568,7 @@ def ground_path(path: Path, binding: Mapping[str, Value]) -> GroundPredicates:
     )
 
 
-def expand_path(path: Path, binding: Mapping[str, Value], value_of, where: str) -> Path:
+def expand_path(path: DecompositionPath, binding: Mapping[str, Value], value_of, where: str) -> DecompositionPath:
     """Repeat the recursive fragments of ``path`` as often as the world allows (§7.6).
 
     ``value_of(function, args)`` gives the function's value (None if unknown).  For the guard
@@ -599,4 +599,4 @@ def expand_path(path: Path, binding: Mapping[str, Value], value_of, where: str) 
         if k > 0:
             steps[end + 1:end + 1] = block * k
             offset += len(block) * k
-    return Path(tuple(steps), path.tree, ())
+    return DecompositionPath(tuple(steps), path.tree, ())

@@ -17,8 +17,7 @@ from typing import Any, Callable, TypeVar
 from .constraints import Constraint, generate_constraints
 from .errors import MissionError
 from .expansion import Expansion, expand
-from .htn import Path as HtnPath
-from .htn import all_task_paths
+from .htn import DecompositionPath, all_task_paths
 from .io.config import Configuration, load_configuration
 from .io.goal_model import GoalModel, load_goal_model
 from .io.hddl import Domain, load_domain
@@ -201,7 +200,7 @@ class Mission:
         return expand(self.goal_model, self.domain, self.config, self.knowledge, report)
 
     @cached_property
-    def paths(self) -> dict[str, list[HtnPath]]:
+    def paths(self) -> dict[str, list[DecompositionPath]]:
         """Decomposition paths of every abstract task of the domain (used or not)."""
         return all_task_paths(self.domain)
 

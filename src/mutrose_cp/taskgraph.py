@@ -16,7 +16,7 @@ from .annotation_tree import GOAL, MEANSEND, TASK, RatNode
 from .conditions import Test, holds, translate
 from .errors import MissionError
 from .expansion import Expansion, TaskInstance
-from .htn import GroundPredicates, Path, expand_path, ground_path
+from .htn import DecompositionPath, GroundPredicates, expand_path, ground_path
 from .io.config import Configuration
 from .io.goal_model import GoalModel
 from .query import Binding
@@ -33,7 +33,7 @@ class Decomposition:
     id: str
     instance: TaskInstance
     number: int  # 1-based path number
-    path: Path
+    path: DecompositionPath
     predicates: GroundPredicates
 
 
@@ -155,7 +155,7 @@ class _Builder:
     """Initial build (§5.1) with context dependencies (§5.2)."""
 
     def __init__(self, exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
-                 paths: dict[str, list[Path]]) -> None:
+                 paths: dict[str, list[DecompositionPath]]) -> None:
         self.exp = exp
         self.gm = gm
         self.config = config
@@ -433,7 +433,7 @@ def _trim(tg: TaskGraph) -> TaskGraph:
 
 
 def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
-                     paths: dict[str, list[Path]]) -> TaskGraph:
+                     paths: dict[str, list[DecompositionPath]]) -> TaskGraph:
     """Build, connect and trim the Task Graph of an expanded mission."""
     builder = _Builder(exp, gm, config, state, paths)
     tg = builder.build()
