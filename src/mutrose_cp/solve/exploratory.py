@@ -58,6 +58,12 @@ class ExploratoryDecomposer:
         self.ec_partners, self.seq_after = index.ec, index.seq_after
         self.enablers = context_enablers(tg)
         self.robot_pre = {d.index: robot_preconditions(domain, d.decomposition) for d in tg.decompositions()}
+        # the mission queue (§7.2): every task and operator vertex of the trimmed Task Graph;
+        # trimming keeps only operators with two or more children (or an achieve condition),
+        # but an operator whose children were goal leaves (queries) can be left with fewer: it
+        # still scopes its subtree (the original then visits that subtree outside its parent)
+        self.queue = [v.index for v in tg.vertices if v.kind in (ATASK, OP)]
+        self.pos = 0  # the next queue entry to visit
 
     # ------------------------------------------------------------------------------------------
     def run(self) -> list[list[int]]:
@@ -66,13 +72,6 @@ class ExploratoryDecomposer:
             return self._unique_branch()
         if not self.tg.tasks():
             return []  # every task was removed (false contexts): nothing to decompose
-        # every vertex of the trimmed Task Graph that is a task or an operator: trimming keeps
-        # only operators with two or more children (or an achieve condition), but an operator
-        # whose children were goal leaves (queries) can be left with fewer; it still scopes
-        # its subtree (the original then visits that subtree outside its parent operator)
-        self.queue = [v.index for v in self.tg.vertices if v.kind in (ATASK, OP)]
-        self.total = len(self.queue)
-        self.pos = 0
         while self.pos < len(self.queue):
             self._visit({})
         if not self.vmds and self.failures:
@@ -102,7 +101,7 @@ class ExploratoryDecomposer:
         v = self.tg.vertices[self.queue[self.pos]]
         self.pos += 1
         if self.progress is not None:
-            self.progress(self.pos, self.total)
+            self.progress(self.pos, len(self.queue))
         return v
 
     def _front_is_child_of(self, v: int) -> bool:
@@ -139,8 +138,7 @@ class ExploratoryDecomposer:
             while self._front_is_child_of(v.index):
                 E.update(self._visit(effects_in))
             if v.content == "#":
-                self._current_op = v.index
-                self._solve_conflicts(E)
+                self._solve_conflicts(v, E)
         self._achieve(v, {**effects_in, **E})
         return E
 
@@ -162,7 +160,7 @@ class ExploratoryDecomposer:
                                   f"condition of goal {goal}")
             self.vmds = kept
 
-    def _solve_conflicts(self, E: dict[str, Effects]) -> None:
+    def _solve_conflicts(self, v: Vertex, E: dict[str, Effects]) -> None:
         kept = []
         for m in self.vmds:
             seen: dict = {}
@@ -182,7 +180,7 @@ class ExploratoryDecomposer:
         if not kept and self.vmds:
             self._dropped_all("Could not solve conflicts in valid mission decompositions generation: every "
                               "combination of the parallel tasks below "
-                              f"{self.tg.vertices[self._current_op].related_goal} sets some fact both true and false")
+                              f"{v.related_goal} sets some fact both true and false")
         self.vmds = kept
 
     def _robot_ok(self, d: int, members: set[str]) -> bool:
