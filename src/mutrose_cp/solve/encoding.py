@@ -21,18 +21,22 @@ from ..constraints import Constraint
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Comparison, Domain, Literal
-from ..taskgraph import ATASK, OP, TaskGraph
+from ..taskgraph import ATASK, TaskGraph
 from ..world import InitialState
 from .semantics import (
     ConstraintIndex,
+    EffectScopes,
     Effects,
     achieve_tests,
-    context_enablers,
+    application_order,
+    checks_parallel_conflicts,
     contradicts_itself,
     effects_of,
     initial_state,
-    robot_preconditions,
-    translate_robot_effects,
+    mission_queue,
+    parallel_conflicts,
+    robot_partners,
+    robot_precondition_writers,
     unique_branch_valid,
 )
 
@@ -168,16 +172,14 @@ class Encoder:
         self.initial = initial_state(initial)
         self.facts, self.values = self.initial.facts, self.initial.values
         self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
-        index = ConstraintIndex.of(constraints)
-        self.ec, self.seq_after = index.ec, index.seq_after
-        self.enablers = context_enablers(tg)
+        self.index = ConstraintIndex.of(constraints)
+        self.scopes = EffectScopes(tg)
         self.x: dict[int, Lit] = {}
         self.active: dict[int, Lit] = {}
         self.or_lits: dict[tuple[int, int], Lit] = {}
         self.labels: dict[str, str] = {}
         self._chain_cache: dict = {}
-        self._subtree: dict[int, list[int]] = {}
-        order = sorted(self.effects)  # Task Graph vertex order, the order effects are applied in
+        order = application_order(self.effects)
         self.bool_writers: dict[tuple, list[tuple[int, bool]]] = {}
         self.num_writers: dict[tuple, list[tuple[int, str, float]]] = {}
         for d in order:  # writers of each atom, in the order their effects are applied (§7.3)
@@ -191,15 +193,14 @@ class Encoder:
         tg = self.tg
         if tg.unique_branch:
             return self._unique_branch()
-        queue = [v.index for v in tg.vertices if v.kind in (ATASK, OP)]
+        queue = mission_queue(tg)
         self.queue_pos = {v: i for i, v in enumerate(queue)}
         self._choices(0, TRUE)
         tasks = [v for v in queue if tg.vertices[v].kind == ATASK]
         for t in tasks:
             self._task_rules(t)
         for v in queue:
-            vx = tg.vertices[v]
-            if vx.kind == OP and vx.content == "#" and not tg.is_or(v):
+            if checks_parallel_conflicts(tg, v):
                 self._conflicts(v)
             for goal, test in achieve_tests(tg, v, self.gm, self.config):
                 self._achieve(v, goal, test)
@@ -254,15 +255,6 @@ class Encoder:
         else:
             for c in children:
                 self._choices(c, active)
-
-    def _subtree_decompositions(self, v: int) -> list[int]:
-        if v not in self._subtree:
-            tg = self.tg
-            if tg.vertices[v].kind == ATASK:
-                self._subtree[v] = [d.index for d in tg.decompositions_of(v)]
-            else:
-                self._subtree[v] = [d for c in tg.children(v) for d in self._subtree_decompositions(c)]
-        return self._subtree[v]
 
     # --- world values ------------------------------------------------------------------------------
     def _bool_value(self, atom: tuple, writers: list[tuple[int, bool]]) -> tuple[Lit, Lit]:
@@ -341,24 +333,9 @@ class Encoder:
         return [w for w in self.num_writers.get(atom, ()) if w[0] in decs]
 
     # --- rules -------------------------------------------------------------------------------------
-    def _preceding(self, v: int) -> set[int]:
-        """Decompositions whose effects vertex ``v`` sees (§7.3): for every enclosing sequence,
-        those of the subtrees before the branch that holds ``v``."""
-        tg = self.tg
-        out: set[int] = set()
-        child, p = v, tg.vertices[v].parent
-        while p >= 0:
-            if tg.vertices[p].content == ";":
-                for c in tg.children(p):
-                    if c == child:
-                        break
-                    out.update(self._subtree_decompositions(c))
-            child, p = p, tg.vertices[p].parent
-        return out
-
     def _task_rules(self, t: int) -> None:
         tg = self.tg
-        seen = self._preceding(t) | self.enablers.get(t, set())
+        seen = self.scopes.seen_by_task(t)
         for i, context in enumerate(tg.vertices[t].contexts):
             ok = self._state_test(context, seen, f"context({tg.vertices[t].content})")
             self.m.clause([neg(self.active[t]), ok], self._label(
@@ -383,60 +360,42 @@ class Encoder:
             self._robot_rules(d, t)
 
     def _robot_rules(self, d: int, t: int) -> None:
-        """Robot preconditions against the effects of execution-constrained partners visited
-        earlier that do not have to follow ``d``."""
-        pre = robot_preconditions(self.domain, self.tg.vertices[d].decomposition)
-        if not pre:
-            return
+        """Robot-related preconditions of ``d``: the last chosen partner that writes one must
+        agree with it (an unknown robot fact holds)."""
         tg = self.tg
         dec = tg.vertices[d].decomposition
-        partners = [e for e in sorted(self.ec.get(d, ()))
-                    if self.queue_pos[tg.vertices[e].parent] < self.queue_pos[t]
-                    and e not in self.seq_after.get(d, set())]
-        for lit in pre:
-            writers = []
-            for e in partners:
-                for eff in translate_robot_effects(self.domain, self.tg.vertices[e].decomposition, dec):
-                    if eff.predicate == lit.predicate and eff.args == lit.args:
-                        writers.append((e, eff.positive))
-            if not writers:
-                continue
-            # an unknown robot fact holds; a fact set by an earlier partner must agree
+        assert dec is not None
+        partners = robot_partners(tg, self.index, d, self.queue_pos)
+        for lit, writers in robot_precondition_writers(self.domain, tg, d, partners):
             later: list[Lit] = []
-            for e, pol in reversed(writers):
-                if pol != lit.positive:
+            for e, value in reversed(writers):
+                if value != lit.positive:
                     self.m.clause([neg(self.x[d]), neg(self.x[e])] + later,
                                   self._label(f"robot:{dec.id}:{lit}", f"{dec.id}: robot precondition {_show(lit)} "
-                                              f"contradicts the effect of {self.tg.vertices[e].content}"))
+                                              f"contradicts the effect of {tg.vertices[e].content}"))
                 later.append(self.x[e])
 
     def _conflicts(self, v: int) -> None:
         """AND-parallel: no two chosen decompositions below ``v`` set a fact both ways."""
-        by_atom: dict[tuple, tuple[list[int], list[int]]] = {}
-        for d in sorted(self._subtree_decompositions(v)):
-            for atom, val in self.effects[d].facts:
-                pos, negs = by_atom.setdefault(atom, ([], []))
-                (pos if val else negs).append(d)
-        for atom, (pos, negs) in sorted(by_atom.items()):
-            if not pos or not negs:
-                continue
+        for c in parallel_conflicts(v, self.scopes, self.effects):
+            atom = c.atom
             label = self._label(f"conflict:{v}:{atom}", f"parallel tasks below {self.tg.vertices[v].related_goal or 'operator ' + str(v)} "
                                 f"set {atom[0]}({', '.join(atom[1])}) both true and false")
-            if len(pos) * len(negs) <= 16:
-                for a in pos:
-                    for b in negs:
+            if len(c.setting_true) * len(c.setting_false) <= 16:
+                for a in c.setting_true:
+                    for b in c.setting_false:
                         if self.tg.vertices[a].parent != self.tg.vertices[b].parent:
                             self.m.clause([neg(self.x[a]), neg(self.x[b])], label)
             else:
-                any_pos = self.m.or_of([self.x[a] for a in pos], f"anypos({atom})")
-                any_neg = self.m.or_of([self.x[b] for b in negs], f"anyneg({atom})")
+                any_pos = self.m.or_of([self.x[a] for a in c.setting_true], f"anypos({atom})")
+                any_neg = self.m.or_of([self.x[b] for b in c.setting_false], f"anyneg({atom})")
                 self.m.clause([neg(any_pos), neg(any_neg)], label)
 
     def _achieve(self, v: int, goal: str, test: Test) -> None:
         """An achieve condition checked at ``v`` must hold when ``v`` is active, after the
         effects of ``v``'s subtree.  A conjunction is posted part by part (one per forAll
         element), so independent instances stay in independent components."""
-        decs = set(self._subtree_decompositions(v)) | self._preceding(v)
+        decs = self.scopes.seen_by_achieve(v)
         parts = list(_conjuncts(test))
         for i, part in enumerate(parts):
             holds = self._state_test(part, decs, f"achieve({goal}@{v})")

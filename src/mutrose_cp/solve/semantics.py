@@ -1,14 +1,25 @@
-"""World-state semantics shared by both decomposition algorithms (spec ``semantics.md`` §7).
+"""The rules of valid mission decompositions (spec ``semantics.md`` §7), decided once.
 
-Both the exploratory combination and the CP-SAT model ask the same questions: which world facts
-a decomposition changes, whether its preconditions hold in a state, which robot-related
-preconditions must be checked against execution-constrained partners, and what an operator's
-achieve condition requires.
+Both decomposers ask the same questions and answer them here:
+
+* the mission queue (§7.2): :func:`mission_queue`;
+* which effects a vertex sees and in which order they apply (§7.3): :class:`EffectScopes`,
+  :func:`application_order`, :class:`State`;
+* preconditions (§7.4): :func:`ground_preconditions_hold`, :func:`contradicts_itself`;
+* context dependencies (§5.2, checked where the task starts): :func:`context_enablers`;
+* robot-related preconditions against execution-constrained partners (§7.4):
+  :func:`robot_partners`, :func:`robot_precondition_writers`;
+* parallel conflicts (§7.3): :func:`checks_parallel_conflicts`, :func:`parallel_conflicts`;
+* achieve conditions (§7.5): :func:`achieve_tests`;
+* unique-branch missions (§7.7): :func:`unique_branch_valid`.
+
+The exploratory algorithm applies these rules to explicit lists of partial decompositions; the
+CP-SAT encoder posts the same rules as clauses over choice literals.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable
+from typing import Iterable, Mapping
 
 from ..conditions import AllOf, Test, compare, holds, translate
 from ..constraints import EC, SEQ, Constraint
@@ -17,7 +28,7 @@ from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Domain, Literal
 from ..query import Binding
-from ..taskgraph import CD, Decomposition, TaskGraph, Vertex
+from ..taskgraph import ATASK, CD, OP, Decomposition, TaskGraph, Vertex
 from ..world import InitialState
 
 AtomKey = tuple[str, tuple[str, ...]]
@@ -261,3 +272,142 @@ def unique_branch_valid(tg: TaskGraph, dec: Vertex, initial: State, gm: GoalMode
     state = initial.copy()
     state.apply(effects_of(dec.decomposition))
     return all(holds(t, state.fact, state.value) for t in tests)
+
+
+# ---------------------------------------------------------------------------------------------
+# The mission queue and the scope of effects (§7.2, §7.3)
+
+def mission_queue(tg: TaskGraph) -> list[int]:
+    """§7.2: every task and operator vertex of the trimmed Task Graph, in vertex order.
+
+    Trimming keeps only operators with two or more children (or an achieve condition), but an
+    operator whose children were goal leaves (queries) can be left with fewer: it still scopes
+    its subtree."""
+    return [v.index for v in tg.vertices if v.kind in (ATASK, OP)]
+
+
+def application_order(decompositions: Iterable[int]) -> list[int]:
+    """Decomposition vertices in the order their effects apply: Task Graph vertex order.
+
+    The original's maps are keyed by vertex index (§7.3), which is also the order of the SEQ
+    constraints; the order of the id strings would put ``AT10_1|1`` before ``AT2_1|1``."""
+    return sorted(decompositions)
+
+
+class EffectScopes:
+    """Which decompositions' effects a vertex of the Task Graph sees (§7.3).
+
+    A vertex sees, for every sequence above it, the decompositions of the subtrees before the
+    branch that holds it (the original only looks at the vertex's own parent sequence;
+    docs/deviations.md #16).  A task also sees the decompositions with a context-dependency edge
+    into it, which the SEQ constraints put first (§5.2).  Subtrees are cached: each is asked for
+    by every operator above it."""
+
+    def __init__(self, tg: TaskGraph) -> None:
+        self.tg = tg
+        self.enablers = context_enablers(tg)
+        self._subtree: dict[int, list[int]] = {}
+
+    def subtree(self, v: int) -> list[int]:
+        """The decomposition vertices below ``v`` (its own, for a task), in vertex order."""
+        if v not in self._subtree:
+            tg = self.tg
+            if tg.vertices[v].kind == ATASK:
+                self._subtree[v] = [d.index for d in tg.decompositions_of(v)]
+            else:
+                self._subtree[v] = [d for c in tg.children(v) for d in self.subtree(c)]
+        return self._subtree[v]
+
+    def preceding(self, v: int) -> set[int]:
+        """The decompositions an enclosing sequence puts before ``v``."""
+        tg = self.tg
+        out: set[int] = set()
+        child, p = v, tg.vertices[v].parent
+        while p >= 0:
+            if tg.vertices[p].content == ";":
+                for c in tg.children(p):
+                    if c == child:
+                        break
+                    out.update(self.subtree(c))
+            child, p = p, tg.vertices[p].parent
+        return out
+
+    def seen_by_task(self, t: int) -> set[int]:
+        """The decompositions whose effects make the state where task ``t`` starts."""
+        return self.preceding(t) | self.enablers.get(t, set())
+
+    def seen_by_achieve(self, v: int) -> set[int]:
+        """The decompositions whose effects make the state where ``v``'s achieve conditions are
+        checked: those of its subtree and those before it."""
+        return set(self.subtree(v)) | self.preceding(v)
+
+
+# ---------------------------------------------------------------------------------------------
+# Parallel conflicts (§7.3)
+
+@dataclass(frozen=True)
+class ParallelConflict:
+    """Decompositions below one parallel operator that set ``atom`` to opposite values."""
+
+    atom: AtomKey
+    setting_true: tuple[int, ...]
+    setting_false: tuple[int, ...]
+
+
+def checks_parallel_conflicts(tg: TaskGraph, v: int) -> bool:
+    """Whether operator ``v`` forbids conflicting effects: an AND-parallel ``#`` (an OR ``#``
+    chooses one child, so its children never run together)."""
+    vx = tg.vertices[v]
+    return vx.kind == OP and vx.content == "#" and not tg.is_or(v)
+
+
+def parallel_conflicts(v: int, scopes: EffectScopes, effects: Mapping[int, Effects]) -> list[ParallelConflict]:
+    """The atoms that two decompositions below the parallel operator ``v`` set both ways, by
+    atom.  A valid decomposition does not choose a setter of each side (effects are net per
+    decomposition, so the two setters belong to different tasks)."""
+    by_atom: dict[AtomKey, tuple[list[int], list[int]]] = {}
+    for d in application_order(scopes.subtree(v)):
+        for atom, value in effects[d].facts:
+            setting_true, setting_false = by_atom.setdefault(atom, ([], []))
+            (setting_true if value else setting_false).append(d)
+    return [ParallelConflict(atom, tuple(t), tuple(f)) for atom, (t, f) in sorted(by_atom.items()) if t and f]
+
+
+# ---------------------------------------------------------------------------------------------
+# Robot-related preconditions (§7.4)
+
+def robot_partners(tg: TaskGraph, index: ConstraintIndex, d: int, queue_position: Mapping[int, int]) -> list[int]:
+    """The execution-constrained partners of decomposition ``d`` that can have changed the robots
+    ``d`` shares with them before ``d`` starts: partners of tasks earlier in the mission queue
+    that no SEQ constraint puts after ``d``, in application order."""
+    task = tg.vertices[d].parent
+    after = index.seq_after.get(d, set())
+    return [e for e in application_order(index.ec.get(d, ()))
+            if queue_position[tg.vertices[e].parent] < queue_position[task] and e not in after]
+
+
+def robot_precondition_writers(domain: Domain, tg: TaskGraph, d: int,
+                               partners: Iterable[int]) -> list[tuple[Literal, list[tuple[int, bool]]]]:
+    """Each robot-related precondition of ``d`` with the partners (in application order) whose
+    effects, renamed onto ``d``'s robot parameters, write it: (partner, value written).
+
+    An unknown robot fact holds; the value the last chosen writer gives must agree with the
+    precondition.  Preconditions that no partner writes are left out."""
+    dec = _decomposition(tg, d)
+    preconditions = robot_preconditions(domain, dec)
+    if not preconditions:
+        return []
+    translated = [(e, translate_robot_effects(domain, _decomposition(tg, e), dec)) for e in partners]
+    out = []
+    for lit in preconditions:
+        writers = [(e, eff.positive) for e, effs in translated for eff in effs
+                   if eff.predicate == lit.predicate and eff.args == lit.args]
+        if writers:
+            out.append((lit, writers))
+    return out
+
+
+def _decomposition(tg: TaskGraph, d: int) -> Decomposition:
+    dec = tg.vertices[d].decomposition
+    assert dec is not None
+    return dec
