@@ -323,14 +323,14 @@ def lp_bound(dm: DecompositionModel, robots: list[Robot], durations: dict[str, i
         # not executed); ";", FALLBACK and OR operators add their children up (only one OR child
         # is active), "#" takes the largest.  This keeps the OR choice exact in the chain bound,
         # which the start-time chains above lose when y is fractional.
-        from mutrose_cp.taskgraph import ATASK, OP
+        from mutrose_cp.model.task_graph import OperatorVertex, TaskVertex
 
         memo: dict[int, tuple] = {}
 
         def chain_expr(v: int):
             if v not in memo:
                 vx = tg.vertices[v]
-                if vx.kind == ATASK:
+                if isinstance(vx, TaskVertex):
                     j = lp.var(("L", v), 0.0)
                     lp.add_eq([(1.0, ({j: 1.0}, 0.0))] + [(-float(durations[dv.content]), y[dv.content])
                                                            for dv in tg.decompositions_of(v)])
@@ -340,7 +340,7 @@ def lp_bound(dm: DecompositionModel, robots: list[Robot], durations: dict[str, i
                     parts = [chain_expr(c) for c in kids]
                     j = lp.var(("L", v), 0.0)
                     lv = ({j: 1.0}, 0.0)
-                    if tg.is_or(v) or (vx.kind == OP and vx.content in (";", "FALLBACK")):
+                    if tg.is_or(v) or (isinstance(vx, OperatorVertex) and vx.content in (";", "FALLBACK")):
                         lp.add_le([(-1.0, lv)] + [(1.0, pe) for pe in parts])
                     else:
                         for pe in parts:

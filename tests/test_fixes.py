@@ -11,6 +11,7 @@ import pytest
 from mutrose_cp.cli import main
 from mutrose_cp.errors import MissionError, NoDecompositionError
 from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.model.task_graph import ScopeVertex
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 
@@ -353,7 +354,7 @@ def test_plain_achieve_condition_inside_forall_checked_per_instance(tmp_path):
                  "        <is_delivered>False</is_delivered>\n",
           "<destination>Laboratory</destination>\n        <is_collected>False</is_collected>\n")
     mission = Mission.load(*find_mission_files(folder))
-    assert [v.related_goal for v in mission.task_graph.vertices if v.is_achieve_type] == ["G7"] * 3
+    assert [v.goal for v in mission.task_graph.vertices if isinstance(v, ScopeVertex) and v.achieve] == ["G7"] * 3
     exploratory, cpsat = _both(folder)
     assert exploratory == cpsat
     assert len(cpsat) == 8  # Delivery1: 2 ways to collect x drop box; Deliveries 2 and 3: 2 x 1 each

@@ -11,7 +11,8 @@ import pytest
 
 from mutrose_cp.errors import MissionError, NoDecompositionError
 from mutrose_cp.mission import Mission
-from mutrose_cp.taskgraph import CD, EC, OP
+from mutrose_cp.constraints import EC
+from mutrose_cp.model.task_graph import EdgeKind, OperatorVertex
 
 from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission
 
@@ -41,7 +42,7 @@ def _count(mission: Mission) -> int:
 
 def _cd_edges(mission: Mission) -> list[tuple[str, str]]:
     tg = mission.task_graph
-    return sorted((tg.vertices[a].content, tg.vertices[b].content) for a, b, d in tg.edges() if d["type"] == CD)
+    return sorted((tg.vertices[a].content, tg.vertices[b].content) for a, b, kind, *_ in tg.edges() if kind == EdgeKind.CD)
 
 
 def _ecs(mission: Mission) -> set[tuple[str, str, bool, bool]]:
@@ -66,8 +67,8 @@ def test_achieve_goal_left_with_one_child_keeps_its_operator(cleans):
                                  _task("TaskC", "act1")))
     tg = mission.task_graph
     assert sorted(v.content for v in tg.tasks()) == ["AT2_1", "AT3_1"]
-    achieve_ops = [v for v in tg.vertices if v.kind == OP and v.is_achieve_type]
-    assert ("G4", 1) in [(v.achieve_goal, len(tg.children(v.index))) for v in achieve_ops]
+    achieve_ops = [v for v in tg.vertices if isinstance(v, OperatorVertex) and v.achieve]
+    assert ("G4", 1) in [(v.goal, len(tg.children(v.index))) for v in achieve_ops]
     assert _count(mission) == (1 if cleans else 0)
 
 

@@ -34,7 +34,7 @@ from .io.goal_model import RobotNumber
 from .mission import Mission, find_mission_files
 from .solve.cpsat import CpBuilder
 from .solve.encoding import FALSE, TRUE, Encoding, Lit
-from .taskgraph import ATASK, TaskGraph
+from .model.task_graph import ScopeVertex, TaskGraph, TaskVertex
 
 __all__ = ["Mission", "DecompositionModel", "DecompositionInfo", "ConstraintInfo", "CpLiteral",
            "find_mission_files"]
@@ -220,7 +220,7 @@ def _or_keys(mission: Mission, tg: TaskGraph, enc: Encoding) -> dict[tuple[int, 
     used: set[tuple[str, str]] = set()
     for (v, c) in enc.or_choice_lit:
         vx, cx = tg.vertices[v], tg.vertices[c]
-        goal = vx.related_goal or vx.content
+        goal = (vx.goal if isinstance(vx, ScopeVertex) else None) or vx.content
         k = _forall_depth(mission, goal)
         goal_name = goal
         if k:
@@ -228,7 +228,7 @@ def _or_keys(mission: Mission, tg: TaskGraph, enc: Encoding) -> dict[tuple[int, 
             if inst is not None:  # the task's forAll indices, outermost first: "AT1_2_1" -> 2, 1
                 parts = inst.id[len(inst.gm_task):].split("_")[1:]
                 goal_name = goal + "".join(f"_{p}" for p in parts[:k])
-        child = cx.related_goal or cx.content
+        child = (cx.goal if isinstance(cx, ScopeVertex) else None) or cx.content
         key = (goal_name, child)
         if key in used:  # defensive: never merge two choices (should not happen)
             key = (f"{goal_name}@{v}", child)
@@ -241,7 +241,8 @@ def _first_task_below(tg: TaskGraph, v: int):
     stack = [v]
     while stack:
         u = stack.pop()
-        if tg.vertices[u].kind == ATASK:
-            return tg.vertices[u].instance
+        vertex = tg.vertices[u]
+        if isinstance(vertex, TaskVertex):
+            return vertex.instance
         stack.extend(reversed(tg.children(u)))
     return None

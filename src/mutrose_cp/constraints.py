@@ -7,12 +7,21 @@ SEQ/FB links are trimmed, and EC partners must agree on robot numbers.
 """
 from __future__ import annotations
 
+from enum import StrEnum
 from typing import NamedTuple
 
 from .errors import MissionError
-from .taskgraph import AND, ATASK, CD, EC, OP, OR, TaskGraph
+from .model.task_graph import EdgeKind, OperatorVertex, TaskGraph, TaskVertex
 
-SEQ, FB, PAR = "SEQ", "FB", "PAR"
+
+class ConstraintKind(StrEnum):
+    SEQ = "SEQ"  # sequential: the first runs before the second
+    FB = "FB"  # fallback: the second runs only if the first fails
+    EC = "EC"  # execution constraint: the two share robots (Group/Divisible)
+    PAR = "PAR"  # parallel: only while generating (§6.1), never in the final list
+
+
+SEQ, FB, EC, PAR = ConstraintKind.SEQ, ConstraintKind.FB, ConstraintKind.EC, ConstraintKind.PAR
 
 
 class Constraint(NamedTuple):
@@ -20,7 +29,7 @@ class Constraint(NamedTuple):
 
     A named tuple: large missions have around a million of them."""
 
-    kind: str  # SEQ | FB | EC (| PAR while generating)
+    kind: ConstraintKind
     first: int
     second: int
     group: bool = True
@@ -30,7 +39,7 @@ class Constraint(NamedTuple):
 _Child = int | list[Constraint]  # a task vertex, or the constraint list of a subtree
 
 
-def _pairs(kind: str, x: _Child, y: _Child) -> list[tuple[int, int]]:
+def _pairs(kind: ConstraintKind, x: _Child, y: _Child) -> list[tuple[int, int]]:
     """Endpoint pairs generated between two children of a SEQ, FB or PAR node (§6.1)."""
     out: list[tuple[int, int]] = []
     if isinstance(x, int) and isinstance(y, int):
@@ -82,11 +91,11 @@ def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constra
     vx = tg.vertices[v]
     kind = {";": SEQ, "FALLBACK": FB}.get(vx.content, PAR)
     children: list[_Child] = []
-    for u in tg.out(v, AND, OR):
+    for u in tg.out(v, EdgeKind.AND, EdgeKind.OR):
         ux = tg.vertices[u]
-        if ux.kind == ATASK:
+        if isinstance(ux, TaskVertex):
             children.append(u)
-        elif ux.kind == OP:
+        elif isinstance(ux, OperatorVertex):
             children.append(_tree_constraints(tg, u, pairs_needed or kind != PAR))
     pairs: list[tuple[int, int]] = []
     if kind == PAR and not pairs_needed:
@@ -124,7 +133,7 @@ def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint]) -> lis
             out += [Constraint(c.kind, da, db) for da in _decompositions(tg, c.first) for db in _decompositions(tg, c.second)]
         else:
             for da in _decompositions(tg, c.first):
-                if c.second in tg.out(da, CD):
+                if c.second in tg.out(da, EdgeKind.CD):
                     out += [Constraint(SEQ, da, db) for db in _decompositions(tg, c.second)]
     return out
 
@@ -200,9 +209,9 @@ def generate_constraints(tg: TaskGraph) -> list[Constraint]:
     out: list[Constraint] = []
     if not tg.unique_branch:
         root = tg.vertices[0]
-        if root.kind != OP:
+        if not isinstance(root, OperatorVertex):
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
-        has_cd = any(d["type"] == CD for _, _, d in tg.edges())
+        has_cd = any(e.kind == EdgeKind.CD for e in tg.edges())
         out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd))
     out += _execution_constraints(tg)
     out = _trim(out)

@@ -20,7 +20,7 @@ from .constraints import EC, FB, SEQ
 from .errors import MissionError
 from .htn import TreeNode
 from .output import OutputModel, write_boost_json
-from .taskgraph import Decomposition
+from .model.task_graph import Decomposition
 
 
 def _orderings(members: list[int], succ: dict[int, set[int]]) -> Iterator[list[int]]:

@@ -17,7 +17,7 @@ from .errors import MissionError
 from .io.config import Configuration
 from .io.hddl import Domain, Literal
 from .output_file import atomic_writer
-from .taskgraph import Decomposition, TaskGraph
+from .model.task_graph import Decomposition, TaskGraph
 from .world import InitialState
 
 Tree = Any  # str | list[Tree] | dict[str, Tree]

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Iterable, Mapping
 from .annotation_tree import GOAL, OPERATOR, TASK, RatNode
 from .constraints import EC, FB, SEQ
 from .errors import MissionError, NoDecompositionError
-from .taskgraph import AND, ATASK, CD, DECOMPOSITION, GOALNODE, OP, OR
+from .model.task_graph import DecompositionVertex, EdgeKind, GoalVertex, OperatorVertex, TaskVertex
 
 if TYPE_CHECKING:  # pragma: no cover
     from .expansion import TaskInstance
@@ -383,53 +383,49 @@ def task_graph_dot(mission: "Mission", rankdir: str = "LR") -> str:
     dot = _new_graph("task_graph", rankdir, None, nodesep="0.12", ranksep="0.35")
     ids: dict[int, str] = {}
     for v in tg.vertices:
-        if v.kind == ATASK:
-            ids[v.index] = dot.unique(v.content)
-        elif v.kind == DECOMPOSITION:
+        if isinstance(v, (TaskVertex, DecompositionVertex)):
             ids[v.index] = dot.unique(v.content)
         else:
             ids[v.index] = dot.unique(f"v{v.index}")
     for v in tg.vertices:
         nid = ids[v.index]
-        if v.kind == OP:
+        if isinstance(v, OperatorVertex):
             symbol = "OR" if tg.is_or(v.index) else v.content
-            lines = [f"{symbol}  {v.related_goal or v.achieve_goal or ''}".rstrip()]
-            if v.is_forall:
+            lines = [f"{symbol}  {v.goal or ''}".rstrip()]
+            if v.forall:
                 lines.append("forAll")
-            elif v.is_achieve_type:
+            elif v.achieve:
                 lines.append("achieve")
             if not v.group or not v.divisible:
                 lines.append(_constraining_flag(v.group, v.divisible))
             dot.node(nid, shape="ellipse", label=_label(lines), margin="0.05,0.02", height="0.3",
                      **_filled(OPERATOR_COLOURS))
-        elif v.kind == GOALNODE:
+        elif isinstance(v, GoalVertex):
             lines = [v.content]
             if not v.group or not v.divisible:
                 lines.append(_constraining_flag(v.group, v.divisible))
             dot.node(nid, shape="box", label=_label(lines), **_filled(GOAL_COLOURS, "rounded,filled"))
-        elif v.kind == ATASK:
+        elif isinstance(v, TaskVertex):
             dot.node(nid, shape="box", label=_label(_task_lines(v.content, v.instance)), **_filled(TASK_COLOURS))
         else:
-            dec = v.decomposition
             lines = [f"{keys.get(v.index, '')}  {v.content}".strip()]
-            actions = [s.name for s in dec.path.actions] if dec is not None else []
+            actions = [s.name for s in v.decomposition.path.actions]
             lines += actions or ["(no action)"]
             dot.node(nid, shape="box", label=_label(lines), fontsize="8", margin="0.05,0.03", height="0.2",
                      **_filled(DECOMPOSITION_COLOURS))
-    for a, b, data in tg.edges():
-        kind = data["type"]
-        if kind == AND:
+    for a, b, kind, group, divisible in tg.edges():
+        if kind == EdgeKind.AND:
             dot.edge(ids[a], ids[b])
-        elif kind == OR:
+        elif kind == EdgeKind.OR:
             dot.edge(ids[a], ids[b], style="dashed")
-        elif kind == CD:
+        elif kind == EdgeKind.CD:
             dot.edge(ids[a], ids[b], style="dotted", color=CD_COLOUR, fontcolor=CD_COLOUR, label="CD",
                      constraint=False, penwidth="1.5")
-        elif kind == EC:
+        elif kind == EdgeKind.EC:
             if tg.has_edge(b, a) and b < a:
                 continue  # EC edges come in pairs: draw each once
             dot.edge(ids[a], ids[b], dir="none", color=EC_COLOUR, fontcolor=EC_COLOUR, constraint=False,
-                     label="EC " + _flags_text(data.get("group", True), data.get("divisible", True)),
+                     label="EC " + _flags_text(group, divisible),
                      penwidth="1.5")
     return dot.text()
 
@@ -514,7 +510,7 @@ def decomposition_dot(mission: "Mission", index: int = 0, rankdir: str = "LR") -
     # group by the forAll element when the root is a forAll operator
     root = tg.vertices[0] if tg.vertices else None
     groups: dict[int, list[int]] = {}
-    if root is not None and root.is_forall and root.kind == OP and not tg.unique_branch:
+    if isinstance(root, OperatorVertex) and root.forall and not tg.unique_branch:
         top = {u: i for i, u in enumerate(tg.children(0))}
         for d in chosen:
             a = d
@@ -522,7 +518,7 @@ def decomposition_dot(mission: "Mission", index: int = 0, rankdir: str = "LR") -
                 a = tg.vertices[a].parent
             groups.setdefault(a, []).append(d)
     if groups and all(g != -1 for g in groups):
-        goal = mission.goal_model.node(root.achieve_goal) if root.achieve_goal else None
+        goal = mission.goal_model.node(root.goal) if isinstance(root, OperatorVertex) and root.goal else None
         it = goal.forall.iteration if goal is not None and goal.forall is not None else None
         ordered = list(enumerate(sorted(groups.items(), key=lambda kv: kv[0]), start=1))
         if rankdir == "LR":

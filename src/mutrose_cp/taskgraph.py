@@ -1,154 +1,36 @@
-"""The Task Graph (spec ``semantics.md`` §5), shared by both decomposition algorithms.
+"""Building the Task Graph (spec ``semantics.md`` §5), shared by both decomposition algorithms.
 
-Vertices are operators (``;``, ``#``, ``FALLBACK``), means-end goal nodes, task instances and
-their decompositions; edges are AND/OR refinements, context dependencies (CD) and execution
-constraints (EC).  The graph is built from the runtime annotation tree, then reduced to the
-"minimal Task Graph" whose vertex order fixes the output keys ``t0, t1, ...``.
+The graph is built from the runtime annotation tree (§5.1) with its context dependencies
+(§5.2, §5.3) and execution constraints (§5.4), then reduced to the "minimal Task Graph" (§5.5)
+whose vertex order fixes the output keys ``t0, t1, ...``.  The types are in
+:mod:`mutrose_cp.model.task_graph`; a :class:`TaskGraphBuilder` is frozen once the rules are done.
 """
 from __future__ import annotations
 
-import copy
-from dataclasses import dataclass, field
-from typing import Iterator, Mapping
-
+from dataclasses import replace
 
 from .annotation_tree import GOAL, MEANSEND, TASK, RatNode
 from .conditions import Test, holds, translate
 from .errors import MissionError
-from .expansion import Expansion, TaskInstance
-from .htn import DecompositionPath, GroundPredicates, expand_path, ground_path
+from .expansion import Expansion
+from .htn import DecompositionPath, expand_path, ground_path
 from .io.config import Configuration
 from .io.goal_model import GoalModel
-from .query import Binding
+from .model.task_graph import (
+    Decomposition,
+    DecompositionVertex,
+    EdgeKind,
+    ExecutionPartner,
+    GoalVertex,
+    OperatorVertex,
+    ScopeVertex,
+    TaskGraph,
+    TaskGraphBuilder,
+    TaskVertex,
+)
 from .world import InitialState
 
-AND, OR, CD, EC = "AND", "OR", "CD", "EC"
-OP, GOALNODE, ATASK, DECOMPOSITION = "op", "goal", "task", "decomposition"
-
-
-@dataclass(frozen=True)
-class Decomposition:
-    """One HTN decomposition path of one task instance: ``AT1_1|2``."""
-
-    id: str
-    instance: TaskInstance
-    number: int  # 1-based path number
-    path: DecompositionPath
-    predicates: GroundPredicates
-
-
-@dataclass
-class Vertex:
-    index: int
-    kind: str  # OP | GOALNODE | ATASK | DECOMPOSITION
-    content: str  # operator symbol, goal id, instance id or decomposition id
-    parent: int = -1
-    group: bool = True
-    divisible: bool = True
-    related_goal: str | None = None
-    is_forall: bool = False
-    is_achieve_type: bool = False
-    achieve_goal: str | None = None
-    instance: TaskInstance | None = None
-    decomposition: Decomposition | None = None
-    var_maps: Mapping[str, Binding] = field(default_factory=dict)  # variable values at this node
-    # goal/operator vertices: a creation condition false in the initial state that an earlier task
-    # can make true (§5.2); task vertices: every such condition above them, which must hold
-    # where the task starts
-    contexts: tuple[Test, ...] = ()
-
-
-@dataclass
-class TaskGraph:
-    """Vertices in index order and typed edges (``AND``, ``OR``, ``CD``, ``EC``).
-
-    Edges are kept in plain adjacency lists, in insertion order (which the original's
-    traversals depend on); :attr:`graph` gives the same graph as a networkx ``DiGraph`` for
-    analysis and drawing.  Large missions have hundreds of thousands of EC edges, and building
-    them directly in networkx doubled the time of the whole pipeline."""
-
-    vertices: list[Vertex] = field(default_factory=list)
-    unique_branch: bool = False
-    _succ: dict[int, list[tuple[int, str]]] = field(default_factory=dict)
-    _by_kind: dict[tuple[int, str], list[int]] = field(default_factory=dict)
-    _edges: dict[tuple[int, int], dict] = field(default_factory=dict)  # (a, b) -> {"type": .., flags}
-    # execution constraints are symmetric and numerous: task -> [(partner, group, divisible)]
-    _ec: dict[int, list[tuple[int, bool, bool]]] = field(default_factory=dict)
-    _ec_pairs: set[tuple[int, int]] = field(default_factory=set)
-    _decs: dict[int, list[Vertex]] = field(default_factory=dict)
-    # achieve goals that trimming removed (means-end goals, single-child chains above the root),
-    # by the kept vertex that now stands for their subtree: their conditions are checked there
-    achieve_carried: dict[int, list[Vertex]] = field(default_factory=dict)
-
-    def add(self, vertex: Vertex) -> Vertex:
-        vertex.index = len(self.vertices)
-        self.vertices.append(vertex)
-        self._succ[vertex.index] = []
-        if vertex.kind == DECOMPOSITION:
-            self._decs.setdefault(vertex.parent, []).append(vertex)
-        return vertex
-
-    def add_ec(self, a: int, b: int, group: bool, divisible: bool) -> None:
-        """An execution constraint between task vertices ``a`` and ``b`` (both directions)."""
-        self._ec.setdefault(a, []).append((b, group, divisible))
-        self._ec.setdefault(b, []).append((a, group, divisible))
-        self._ec_pairs.add((a, b))
-        self._ec_pairs.add((b, a))
-
-    def ec_partners(self, v: int) -> list[tuple[int, bool, bool]]:
-        """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
-        return self._ec.get(v, [])
-
-    def add_edge(self, a: int, b: int, kind: str, **flags) -> None:
-        old = self._edges.get((a, b))
-        if old is None:
-            self._succ[a].append((b, kind))
-            self._by_kind.setdefault((a, kind), []).append(b)
-        elif old["type"] != kind:
-            self._succ[a] = [(u, kind if u == b else k) for u, k in self._succ[a]]
-            self._by_kind[(a, old["type"])].remove(b)
-            self._by_kind.setdefault((a, kind), []).append(b)
-        self._edges[(a, b)] = {"type": kind, **flags}
-
-    def has_edge(self, a: int, b: int) -> bool:
-        return (a, b) in self._edges or (a, b) in self._ec_pairs
-
-    def edges(self) -> Iterator[tuple[int, int, dict]]:
-        """All edges (EC ones in both directions), by source vertex and then insertion order."""
-        for a in range(len(self.vertices)):
-            for b, _k in self._succ[a]:
-                yield a, b, self._edges[(a, b)]
-            for b, group, divisible in self._ec.get(a, ()):
-                yield a, b, {"type": EC, "group": group, "divisible": divisible}
-
-    def out(self, v: int, *kinds: str) -> list[int]:
-        """Successors of ``v`` through edges of the given types, in insertion order."""
-        if len(kinds) == 1:
-            return self._by_kind.get((v, kinds[0]), [])
-        return [u for u, k in self._succ[v] if k in kinds]
-
-    def children(self, v: int) -> list[int]:
-        """AND/OR successors in insertion order (a vertex refines into one kind only)."""
-        ands = self._by_kind.get((v, AND))
-        ors = self._by_kind.get((v, OR))
-        if ands and ors:
-            return self.out(v, AND, OR)
-        return ands or ors or []
-
-    def edge_type(self, a: int, b: int) -> str:
-        return self._edges[(a, b)]["type"]
-
-    def decompositions(self) -> list[Vertex]:
-        return [v for v in self.vertices if v.kind == DECOMPOSITION]
-
-    def tasks(self) -> list[Vertex]:
-        return [v for v in self.vertices if v.kind == ATASK]
-
-    def decompositions_of(self, task: int) -> list[Vertex]:
-        return self._decs.get(task, [])
-
-    def is_or(self, v: int) -> bool:
-        return any(k == OR for _, k in self._succ[v])
+AND, OR, CD, EC = EdgeKind.AND, EdgeKind.OR, EdgeKind.CD, EdgeKind.EC
 
 
 class _Builder:
@@ -161,11 +43,11 @@ class _Builder:
         self.config = config
         self.state = state
         self.paths = paths
-        self.tg = TaskGraph()
+        self.tg = TaskGraphBuilder()
         self.instances = {i.id: i for i in exp.instances}
         self.cd_edges: list[tuple[int, int]] = []
 
-    def build(self) -> TaskGraph:
+    def build(self) -> TaskGraphBuilder:
         self._visit(self.exp.rat, None, None)
         return self.tg
 
@@ -175,8 +57,7 @@ class _Builder:
             return None
         return translate(g.context.condition, node.var_maps, self.config, f"{self.gm.source}: goal {goal_id}")
 
-    def _visit(self, node: RatNode, parent: Vertex | None, parent_rat: RatNode | None) -> None:
-        tg = self.tg
+    def _visit(self, node: RatNode, parent: ScopeVertex | None, parent_rat: RatNode | None) -> None:
         edge = OR if parent_rat is not None and parent_rat.or_decomposition else AND
         if node.kind == GOAL:
             return
@@ -185,10 +66,20 @@ class _Builder:
                 raise MissionError("the goal model's root is a task; a mission needs a root goal", self.gm.source)
             self._add_task(node, parent, edge)
             return
+        vertex = self._scope_vertex(node, parent)
+        if vertex is None:
+            return  # a false context that nothing enables: the branch disappears
+        if parent is not None:
+            self.tg.add_edge(parent.index, vertex.index, edge)
+        for child in node.children:
+            self._visit(child, vertex, node)
+
+    def _scope_vertex(self, node: RatNode, parent: ScopeVertex | None) -> ScopeVertex | None:
+        """The operator or means-end goal vertex of ``node``, added to the graph, or None when
+        its goal's creation condition is false and no earlier task can make it true."""
         test = None
         if node.is_forall_dummy:
-            first = node.children[0]
-            goal = first.related_goal
+            goal = node.children[0].related_goal
             is_forall, is_achieve = True, False
         else:
             goal = node.related_goal
@@ -197,35 +88,24 @@ class _Builder:
             is_achieve = bool(gm_goal is not None and gm_goal.goal_type == "Achieve" and not node.inner)
             if not node.inner and goal:
                 test = self._context_test(goal, node)
-        vertex = Vertex(
-            index=-1,
-            kind=GOALNODE if node.kind == MEANSEND else OP,
-            content=node.content,
-            parent=parent.index if parent else -1,
-            group=node.group,
-            divisible=node.divisible,
-            related_goal=goal,
-            is_forall=is_forall,
-            is_achieve_type=is_achieve and not (parent is not None and parent.is_forall),
-            achieve_goal=goal,
-            var_maps=node.var_maps,
-        )
+        contexts: tuple[Test, ...] = ()
+        pending: list[int] = []
         if test is not None and not holds(test, self.state.value_of, self.state.function_value):
-            pending: list[int] = []
             if not self._enabled(test, parent, pending):
-                return  # a false context that nothing enables: the branch disappears
-            vertex.contexts = (test,)
-            tg.add(vertex)
-            for d in pending:
-                self.cd_edges.append((d, vertex.index))
-        else:
-            tg.add(vertex)
-        if parent is not None:
-            tg.add_edge(parent.index, vertex.index, edge)
-        for child in node.children:
-            self._visit(child, vertex, node)
+                return None
+            contexts = (test,)
+        kind = GoalVertex if node.kind == MEANSEND else OperatorVertex
+        vertex = kind(
+            index=self.tg.next_index, parent=parent.index if parent else -1, content=node.content,
+            group=node.group, divisible=node.divisible, goal=goal, forall=is_forall,
+            achieve=is_achieve and not (parent is not None and parent.forall),
+            var_maps=node.var_maps, contexts=contexts,
+        )
+        self.tg.add(vertex)
+        self.cd_edges.extend((d, vertex.index) for d in pending)
+        return vertex
 
-    def _add_task(self, node: RatNode, parent: Vertex, edge: str) -> None:
+    def _add_task(self, node: RatNode, parent: ScopeVertex, edge: EdgeKind) -> None:
         tg = self.tg
         inst = self.instances.get(node.content)
         if inst is None:
@@ -239,71 +119,76 @@ class _Builder:
         contexts: list[Test] = []
         up = parent.index
         while up >= 0:
-            contexts.extend(tg.vertices[up].contexts)
+            contexts.extend(tg.scope(up).contexts)
             up = tg.vertices[up].parent
-        tv = tg.add(Vertex(-1, ATASK, inst.id, parent.index, parent.group, parent.divisible, instance=inst,
-                           contexts=tuple(contexts)))
+        flags = {"group": parent.group, "divisible": parent.divisible}
+        tv = tg.add(TaskVertex(index=tg.next_index, parent=parent.index, content=inst.id, instance=inst,
+                               contexts=tuple(contexts), **flags))
         tg.add_edge(parent.index, tv.index, edge)
         binding = inst.binding
         for n, path in enumerate(self.paths[inst.name], start=1):
             dec = Decomposition(f"{inst.id}|{n}", inst, n, path, ground_path(path, binding))
-            dv = tg.add(Vertex(-1, DECOMPOSITION, dec.id, tv.index, parent.group, parent.divisible,
-                               instance=inst, decomposition=dec))
+            dv = tg.add(DecompositionVertex(index=tg.next_index, parent=tv.index, content=dec.id,
+                                            decomposition=dec, **flags))
             tg.add_edge(tv.index, dv.index, AND)
 
-    def _enabled(self, test: Test, parent: Vertex | None, pending: list[int]) -> bool:
-        """Search the already-built graph for tasks that can make a false context true (§5.2)."""
+    def _enabled(self, test: Test, parent: ScopeVertex | None, pending: list[int]) -> bool:
+        """Search the already-built graph for tasks that can make a false context true (§5.2);
+        the enabling decompositions below a parallel operator go to ``pending`` (CD edges)."""
         tg = self.tg
         visited: set[int] = set()
-        state = self.state
 
         def search(v: int, par: bool) -> bool:
             if v == -1:
                 return False
             vx = tg.vertices[v]
-            if vx.kind != ATASK:
-                if tg.is_or(v) or vx.content == "FALLBACK":
-                    if v == 0:
-                        return False
-                    visited.add(v)
-                    return search(vx.parent, False)
-                par2 = par or (vx.kind == OP and vx.content == "#")
-                for u in tg.children(v):
-                    if u in visited:
-                        continue
-                    found = search(u, par2)
-                    visited.add(u)
-                    if found:
-                        return True
+            if isinstance(vx, TaskVertex):
+                return self._task_enables(test, v, par, pending)
+            if tg.is_or(v) or vx.content == "FALLBACK":
+                if v == 0:
+                    return False
                 visited.add(v)
                 return search(vx.parent, False)
-            ok = False
-            for dv in tg.decompositions_of(v):
-                dec = dv.decomposition
-                assert dec is not None
-                effects = {(e.predicate, e.args): e.positive for e in dec.predicates.ground_effects}
-
-                def fact(p, a, effects=effects):
-                    return effects[(p, a)] if (p, a) in effects else state.value_of(p, a)
-
-                if holds(test, fact, state.function_value):
-                    if par:
-                        pending.append(dv.index)
-                    ok = True
-            return ok
+            par2 = par or (isinstance(vx, OperatorVertex) and vx.content == "#")
+            for u in tg.children(v):
+                if u in visited:
+                    continue
+                found = search(u, par2)
+                visited.add(u)
+                if found:
+                    return True
+            visited.add(v)
+            return search(vx.parent, False)
 
         return search(parent.index if parent else -1, False)
 
+    def _task_enables(self, test: Test, task: int, parallel: bool, pending: list[int]) -> bool:
+        """Whether some decomposition of ``task`` makes ``test`` true; below a parallel operator
+        each such decomposition is recorded in ``pending``."""
+        state = self.state
+        ok = False
+        for dv in self.tg.decompositions_of(task):
+            effects = {(e.predicate, e.args): e.positive for e in dv.decomposition.predicates.ground_effects}
 
-def _final_context_edges(tg: TaskGraph, cd_edges: list[tuple[int, int]]) -> None:
+            def fact(p: str, a: tuple[str, ...], effects: dict[tuple[str, tuple[str, ...]], bool] = effects) -> bool | None:
+                return effects[(p, a)] if (p, a) in effects else state.value_of(p, a)
+
+            if holds(test, fact, state.function_value):
+                if parallel:
+                    pending.append(dv.index)
+                ok = True
+        return ok
+
+
+def _final_context_edges(tg: TaskGraphBuilder, cd_edges: list[tuple[int, int]]) -> None:
     """Redirect each CD edge ``d -> goal`` to every task vertex below the goal (§5.3)."""
     for d, c in cd_edges:
         stack, seen, targets = [c], {c}, []
         while stack:
             v = stack.pop()
-            if tg.vertices[v].kind == ATASK:
+            if isinstance(tg.vertices[v], TaskVertex):
                 targets.append(v)
-            for u, _k in reversed(tg._succ[v]):
+            for u, _k in reversed(tg.successors(v)):
                 if u not in seen:
                     seen.add(u)
                     stack.append(u)
@@ -312,124 +197,172 @@ def _final_context_edges(tg: TaskGraph, cd_edges: list[tuple[int, int]]) -> None
                 tg.add_edge(d, t, CD)
 
 
-def _execution_constraint_edges(tg: TaskGraph) -> None:
+class _ExecutionScopes:
+    """The walk of §5.4 in vertex order: the active Group/Divisible scope (a stack of nested
+    ones whose enclosing scope allows it), the tasks already met in it, and the snapshots that
+    forAll copies and OR alternatives restart from."""
+
+    def __init__(self, tg: TaskGraphBuilder) -> None:
+        self.tg = tg
+        self.active: int | None = None
+        self.stack: list[int] = []
+        self.flags: dict[int, tuple[bool, bool]] = {}
+        self.tasks: list[int] = []
+        self.snapshots: dict[int, list[int]] = {}
+        self.or_nodes: set[int] = set()
+
+    def leave_finished(self, parent: int) -> None:
+        """Close the active scope when the walk has left it, and restart the met tasks at the
+        start of a new forAll copy or OR alternative."""
+        tg = self.tg
+        if self.active is None:
+            return
+        if parent <= tg.vertices[self.active].parent:
+            if not self.stack:
+                self.tasks = []
+                self.active = None
+            else:
+                self.active = self.stack.pop()
+        above = tg.vertices[parent] if parent >= 0 else None
+        restart_forall = isinstance(above, ScopeVertex) and above.forall and self.active is not None \
+            and self.active >= parent
+        if restart_forall or parent in self.or_nodes:
+            self.tasks = list(self.snapshots.get(parent, []))
+
+    def enter_scope(self, v: int, vertex: ScopeVertex) -> None:
+        """Note OR nodes and snapshots, and open a scope at a Group=False or Divisible=False
+        vertex (nested inside an active scope only if that one is a group)."""
+        if self.tg.is_or(v):
+            self.or_nodes.add(v)
+        if vertex.forall or v in self.or_nodes:
+            self.snapshots[v] = list(self.tasks)
+        if vertex.group and vertex.divisible:
+            return
+        if self.active is None:
+            self.flags[v] = (vertex.group, vertex.divisible)
+            self.active = v
+        elif self.flags[self.active][0]:
+            self.flags[v] = (vertex.group, vertex.divisible)
+            self.stack.append(self.active)
+            self.active = v
+
+    def meet_task(self, v: int) -> None:
+        """Constrain task ``v`` with every task met before it in the active scope."""
+        if self.active is None:
+            return
+        group, divisible = self.flags[self.active]
+        for t in sorted(self.tasks):
+            if not self.tg.has_edge(t, v):
+                self.tg.add_ec(t, v, group, divisible)
+        self.tasks.append(v)
+
+
+def _execution_constraint_edges(tg: TaskGraphBuilder) -> None:
     """EC edges from Group/Divisible with the original's priority rules (§5.4)."""
-    active: int | None = None
-    stack: list[int] = []
-    flags: dict[int, tuple[bool, bool]] = {}
-    cur: list[int] = []
-    snap: dict[int, list[int]] = {}
-    or_nodes: set[int] = set()
+    scopes = _ExecutionScopes(tg)
     for v, vx in enumerate(tg.vertices):
-        q = vx.parent
-        if active is not None:
-            if q <= tg.vertices[active].parent:
-                if not stack:
-                    cur = []
-                    active = None
-                else:
-                    active = stack.pop()
-            if (q >= 0 and tg.vertices[q].is_forall and active is not None and active >= q) or q in or_nodes:
-                cur = list(snap.get(q, []))
-        if vx.kind in (OP, GOALNODE) and tg.is_or(v):
-            or_nodes.add(v)
-        if vx.is_forall or v in or_nodes:
-            snap[v] = list(cur)
-        if vx.kind in (OP, GOALNODE) and (not vx.group or not vx.divisible):
-            if active is None:
-                flags[v] = (vx.group, vx.divisible)
-                active = v
-            elif flags[active][0]:
-                flags[v] = (vx.group, vx.divisible)
-                stack.append(active)
-                active = v
-        elif vx.kind == ATASK and active is not None:
-            group, divisible = flags[active]
-            for t in sorted(cur):
-                if (t, v) not in tg._ec_pairs:
-                    tg.add_ec(t, v, group, divisible)
-            cur.append(v)
+        scopes.leave_finished(vx.parent)
+        if isinstance(vx, ScopeVertex):
+            scopes.enter_scope(v, vx)
+        elif isinstance(vx, TaskVertex):
+            scopes.meet_task(v)
 
 
-def _is_unique_branch(tg: TaskGraph) -> bool:
-    return not any(
-        vx.kind in (OP, GOALNODE) and len(tg.children(vx.index)) >= 2 for vx in tg.vertices
-    )
+def _is_unique_branch(tg: TaskGraphBuilder) -> bool:
+    return not any(isinstance(vx, ScopeVertex) and len(tg.children(vx.index)) >= 2 for vx in tg.vertices)
 
 
-def _trim(tg: TaskGraph) -> TaskGraph:
-    """The minimal Task Graph (§5.5)."""
-    root = next(v.index for v in tg.vertices if v.kind in (OP, GOALNODE) and len(tg.children(v.index)) >= 2)
-    new = TaskGraph()
-    index: dict[int, int] = {}
+class _Trimmer:
+    """The minimal Task Graph (§5.5): from the first vertex with two or more children, keep the
+    operators with two or more children (or an achieve condition) and every task with its
+    decompositions, each hung under its closest kept ancestor."""
 
-    def first_edge_type(old: int) -> str:
-        kids = tg.children(old)
-        return tg.edge_type(old, kids[0]) if kids else AND
+    def __init__(self, tg: TaskGraphBuilder) -> None:
+        self.tg = tg
+        self.new = TaskGraphBuilder()
+        self.index: dict[int, int] = {}  # old vertex -> new vertex
 
-    def insert(old: int, parent_old: int | None) -> None:
-        nv = copy.copy(tg.vertices[old])
-        nv.parent = index[parent_old] if parent_old is not None else -1
-        new.add(nv)
-        index[old] = nv.index
+    def trim(self) -> TaskGraphBuilder:
+        tg = self.tg
+        root = next(v.index for v in tg.vertices if isinstance(v, ScopeVertex) and len(tg.children(v.index)) >= 2)
+        below_root = self._subtree(root)
+        for vx in tg.vertices[root:]:
+            v = vx.index
+            if not isinstance(vx, ScopeVertex) or v not in below_root:
+                continue
+            if v == root:
+                self._insert(v, None)
+                self._insert_tasks(v, v)
+            elif isinstance(vx, OperatorVertex) and (len(tg.children(v)) >= 2 or vx.achieve):
+                self._insert(v, self._kept_ancestor(v))
+                self._insert_tasks(v, v)
+            else:
+                self._insert_tasks(v, self._kept_ancestor(v))
+        self._carry_removed_achieve_goals()
+        self._copy_cd_and_ec_edges()
+        return self.new
+
+    def _subtree(self, root: int) -> set[int]:
+        below: set[int] = set()
+        stack = [root]
+        while stack:
+            u = stack.pop()
+            below.add(u)
+            stack.extend(self.tg.children(u))
+        return below
+
+    def _first_edge_kind(self, old: int) -> EdgeKind:
+        kids = self.tg.children(old)
+        return self.tg.edge_kind(old, kids[0]) if kids else AND
+
+    def _insert(self, old: int, parent_old: int | None) -> None:
+        parent = self.index[parent_old] if parent_old is not None else -1
+        vertex = replace(self.tg.vertices[old], index=self.new.next_index, parent=parent)
+        self.new.add(vertex)
+        self.index[old] = vertex.index
         if parent_old is not None:
-            new.add_edge(index[parent_old], nv.index, first_edge_type(parent_old))
+            self.new.add_edge(parent, vertex.index, self._first_edge_kind(parent_old))
 
-    def insert_tasks(op_old: int, under_old: int) -> None:
-        for u in tg.children(op_old):
-            if tg.vertices[u].kind == ATASK:
-                insert(u, under_old)
-                for d in tg.out(u, AND):
-                    nd = copy.copy(tg.vertices[d])
-                    nd.parent = index[u]
-                    new.add(nd)
-                    index[d] = nd.index
-                    new.add_edge(index[u], nd.index, AND)
+    def _insert_tasks(self, op_old: int, under_old: int) -> None:
+        for u in self.tg.children(op_old):
+            if isinstance(self.tg.vertices[u], TaskVertex):
+                self._insert(u, under_old)
+                for d in self.tg.out(u, AND):
+                    nd = replace(self.tg.decomposition(d), index=self.new.next_index, parent=self.index[u])
+                    self.new.add(nd)
+                    self.index[d] = nd.index
+                    self.new.add_edge(self.index[u], nd.index, AND)
 
-    def kept_ancestor(old: int) -> int:
-        p = tg.vertices[old].parent
-        while p not in index:
-            p = tg.vertices[p].parent
+    def _kept_ancestor(self, old: int) -> int:
+        p = self.tg.vertices[old].parent
+        while p not in self.index:
+            p = self.tg.vertices[p].parent
         return p
 
-    below_root: set[int] = set()
-    stack = [root]
-    while stack:
-        u = stack.pop()
-        below_root.add(u)
-        stack.extend(tg.children(u))
-    for vx in tg.vertices[root:]:
-        v = vx.index
-        if vx.kind in (ATASK, DECOMPOSITION) or v not in below_root:
-            continue
-        keep = vx.kind == OP and (len(tg.children(v)) >= 2 or vx.is_achieve_type)
-        if v == root:
-            insert(v, None)
-            insert_tasks(v, v)
-        elif keep:
-            insert(v, kept_ancestor(v))
-            insert_tasks(v, v)
-        else:
-            insert_tasks(v, kept_ancestor(v))
-    for vx in tg.vertices:
-        if vx.index in index or not vx.is_achieve_type or vx.kind not in (OP, GOALNODE):
-            continue
-        u = vx.index  # a removed achieve goal: follow its single child down to a kept vertex
-        while u not in index and len(tg.children(u)) == 1:
-            u = tg.children(u)[0]
-        if u in index:
-            new.achieve_carried.setdefault(index[u], []).append(vx)
-    for a in range(len(tg.vertices)):
-        if a not in index:
-            continue
-        for b, kind in tg._succ[a]:
-            if kind == CD and b in index:
-                new.add_edge(index[a], index[b], CD)
-        for b, group, divisible in tg._ec.get(a, ()):  # each direction keeps its own order
-            if b in index:
-                new._ec.setdefault(index[a], []).append((index[b], group, divisible))
-                new._ec_pairs.add((index[a], index[b]))
-    return new
+    def _carry_removed_achieve_goals(self) -> None:
+        """A removed achieve goal's condition is checked at the kept vertex its single-child
+        chain leads down to."""
+        tg, index = self.tg, self.index
+        for vx in tg.vertices:
+            if vx.index in index or not isinstance(vx, ScopeVertex) or not vx.achieve:
+                continue
+            u = vx.index
+            while u not in index and len(tg.children(u)) == 1:
+                u = tg.children(u)[0]
+            if u in index:
+                self.new.achieve_carried.setdefault(index[u], []).append(vx)
+
+    def _copy_cd_and_ec_edges(self) -> None:
+        tg, index = self.tg, self.index
+        for a in range(len(tg.vertices)):
+            if a not in index:
+                continue
+            for b, kind in tg.successors(a):
+                if kind == CD and b in index:
+                    self.new.add_edge(index[a], index[b], CD)
+            for p in tg.ec_partners(a):  # each direction keeps its own order
+                if p.task in index:
+                    self.new.add_ec_direction(index[a], ExecutionPartner(index[p.task], p.group, p.divisible))
 
 
 def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
@@ -443,22 +376,22 @@ def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state
     _final_context_edges(tg, builder.cd_edges)
     _execution_constraint_edges(tg)
     if _is_unique_branch(tg):
-        tg.unique_branch = True  # the original neither trims nor expands these (§7.7)
-        return tg
+        return tg.freeze(unique_branch=True)  # the original neither trims nor expands these (§7.7)
     _expand_recursions(tg, state)
-    return _trim(tg)
+    return _Trimmer(tg).trim().freeze()
 
 
-def _expand_recursions(tg: TaskGraph, state: InitialState) -> None:
+def _expand_recursions(tg: TaskGraphBuilder, state: InitialState) -> None:
     """Unroll recursive methods as often as the initial world state asks (§7.6).
 
     The original computes the repetitions from the world state at the point where the
     decomposition is accepted; here the initial state is used, so that the decomposition does
     not depend on the combination (docs/deviations.md)."""
-    for v in tg.vertices:
+    for v in tg.decompositions():
         dec = v.decomposition
-        if v.kind != DECOMPOSITION or dec is None or not dec.path.needs_expansion:
+        if not dec.path.needs_expansion:
             continue
         binding = dec.instance.binding
         path = expand_path(dec.path, binding, state.function_value, dec.id)
-        v.decomposition = Decomposition(dec.id, dec.instance, dec.number, path, ground_path(path, binding))
+        tg.replace(replace(v, decomposition=Decomposition(dec.id, dec.instance, dec.number, path,
+                                                          ground_path(path, binding))))

@@ -21,7 +21,7 @@ from ..constraints import Constraint
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Comparison, Domain, Literal
-from ..taskgraph import ATASK, TaskGraph
+from ..model.task_graph import TaskGraph, TaskVertex
 from ..world import InitialState
 from .semantics import (
     ConstraintIndex,
@@ -196,7 +196,7 @@ class Encoder:
         queue = mission_queue(tg)
         self.queue_pos = {v: i for i, v in enumerate(queue)}
         self._choices(0, TRUE)
-        tasks = [v for v in queue if tg.vertices[v].kind == ATASK]
+        tasks = [v for v in queue if isinstance(tg.vertices[v], TaskVertex)]
         for t in tasks:
             self._task_rules(t)
         for v in queue:
@@ -234,7 +234,7 @@ class Encoder:
         tg = self.tg
         vx = tg.vertices[v]
         self.active[v] = active
-        if vx.kind == ATASK:
+        if isinstance(vx, TaskVertex):
             lits = []
             for d in tg.decompositions_of(v):
                 lit = self.m.new_bool(d.content)
@@ -247,7 +247,7 @@ class Encoder:
         if tg.is_or(v):
             lits = []
             for c in children:
-                lit = self.m.new_bool(f"{vx.related_goal or vx.content}@{v}->{tg.vertices[c].content}")
+                lit = self.m.new_bool(f"{tg.scope(v).goal or vx.content}@{v}->{tg.vertices[c].content}")
                 self.or_lits[(v, c)] = lit
                 lits.append(lit)
                 self._choices(c, lit)
@@ -379,7 +379,7 @@ class Encoder:
         """AND-parallel: no two chosen decompositions below ``v`` set a fact both ways."""
         for c in parallel_conflicts(v, self.scopes, self.effects):
             atom = c.atom
-            label = self._label(f"conflict:{v}:{atom}", f"parallel tasks below {self.tg.vertices[v].related_goal or 'operator ' + str(v)} "
+            label = self._label(f"conflict:{v}:{atom}", f"parallel tasks below {self.tg.scope(v).goal or 'operator ' + str(v)} "
                                 f"set {atom[0]}({', '.join(atom[1])}) both true and false")
             if len(c.setting_true) * len(c.setting_false) <= 16:
                 for a in c.setting_true:

@@ -17,7 +17,7 @@ from ..errors import NoDecompositionError, Problem
 from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Domain, Literal
-from ..taskgraph import ATASK, TaskGraph, Vertex
+from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex
 from ..world import InitialState
 from .semantics import (
     ConstraintIndex,
@@ -109,8 +109,9 @@ class ExploratoryDecomposer:
             state.apply(self.effects[d])
         return state
 
-    def _pop(self) -> Vertex:
+    def _pop(self) -> ScopeVertex | TaskVertex:
         v = self.tg.vertices[self.queue[self.pos]]
+        assert isinstance(v, (ScopeVertex, TaskVertex))
         self.pos += 1
         if self.progress is not None:
             self.progress(self.pos, len(self.queue))
@@ -122,12 +123,12 @@ class ExploratoryDecomposer:
     def _visit(self) -> None:
         """Visit the next vertex of the queue (§7.3)."""
         v = self._pop()
-        if v.kind == ATASK:
+        if isinstance(v, TaskVertex):
             self._task(v)
         else:
             self._operator(v)
 
-    def _operator(self, v: Vertex) -> None:
+    def _operator(self, v: ScopeVertex) -> None:
         """Visit an operator's children: each extends the partial decompositions in turn, except
         below an OR, where each child extends its own copy of them."""
         if v.content == "#" and self.tg.is_or(v.index):
@@ -145,7 +146,7 @@ class ExploratoryDecomposer:
                 self._solve_conflicts(v, parallel_conflicts(v.index, self.scopes, self.effects))
         self._achieve(v)
 
-    def _achieve(self, v: Vertex) -> None:
+    def _achieve(self, v: ScopeVertex | TaskVertex) -> None:
         """§7.5: drop the partial decompositions whose state after ``v``'s subtree violates an
         achieve condition checked at ``v``."""
         tests = achieve_tests(self.tg, v.index, self.gm, self.config)
@@ -159,7 +160,7 @@ class ExploratoryDecomposer:
                                   f"condition of goal {goal}")
             self.partials = kept
 
-    def _solve_conflicts(self, v: Vertex, conflicts: list[ParallelConflict]) -> None:
+    def _solve_conflicts(self, v: ScopeVertex, conflicts: list[ParallelConflict]) -> None:
         """Drop the partial decompositions that choose both sides of a parallel conflict."""
         if not conflicts:
             return
@@ -169,7 +170,7 @@ class ExploratoryDecomposer:
         if not kept and self.partials:
             self._dropped_all("Could not solve conflicts in valid mission decompositions generation: every "
                               "combination of the parallel tasks below "
-                              f"{v.related_goal} sets some fact both true and false")
+                              f"{v.goal} sets some fact both true and false")
         self.partials = kept
 
     def _robot_ok(self, d: int, m: _PartialDecomposition) -> bool:
@@ -181,7 +182,7 @@ class ExploratoryDecomposer:
                 return False
         return True
 
-    def _task(self, v: Vertex) -> None:
+    def _task(self, v: TaskVertex) -> None:
         """Extend each partial decomposition with each decomposition of task ``v`` valid in the
         state where ``v`` starts."""
         decompositions = self.tg.decompositions_of(v.index)

@@ -28,7 +28,7 @@ from ..io.config import Configuration
 from ..io.goal_model import GoalModel
 from ..io.hddl import Domain, Literal
 from ..query import Binding
-from ..taskgraph import ATASK, CD, OP, Decomposition, TaskGraph, Vertex
+from ..model.task_graph import Decomposition, DecompositionVertex, EdgeKind, OperatorVertex, ScopeVertex, TaskGraph, TaskVertex
 from ..world import InitialState
 
 AtomKey = tuple[str, tuple[str, ...]]
@@ -135,7 +135,7 @@ def context_enablers(tg: TaskGraph) -> dict[int, set[int]]:
     them; docs/deviations.md)."""
     out: dict[int, set[int]] = {}
     for d in tg.decompositions():
-        for t in tg.out(d.index, CD):
+        for t in tg.out(d.index, EdgeKind.CD):
             out.setdefault(t, set()).add(d.index)
     return out
 
@@ -200,14 +200,14 @@ def translate_robot_effects(domain: Domain, source: Decomposition, target: Decom
     return out
 
 
-def achieve_test(vertex: Vertex, gm: GoalModel, config: Configuration) -> Test | None:
+def achieve_test(vertex: ScopeVertex, gm: GoalModel, config: Configuration) -> Test | None:
     """The achieve condition an operator vertex must satisfy (§7.5), or None.
 
     A ``forAll`` condition must hold for *every* element of the iterated collection of this
     node (the original checks only the last element; see ``docs/deviations.md``)."""
-    if not (vertex.is_forall or vertex.is_achieve_type) or not vertex.achieve_goal:
+    if not (vertex.forall or vertex.achieve) or not vertex.goal:
         return None
-    goal = gm.node(vertex.achieve_goal)
+    goal = gm.node(vertex.goal)
     where = f"{gm.source}: goal {goal.id}"
     if goal.forall is not None:
         fa = goal.forall
@@ -237,9 +237,10 @@ def achieve_tests(tg: TaskGraph, v: int, gm: GoalModel, config: Configuration) -
     The original loses the latter: a means-end achieve goal (one child) is not an operator, so
     trimming drops it with its condition (docs/deviations.md)."""
     out = []
-    own = achieve_test(tg.vertices[v], gm, config)
+    vertex = tg.vertices[v]
+    own = achieve_test(vertex, gm, config) if isinstance(vertex, ScopeVertex) else None
     if own is not None:
-        out.append((tg.vertices[v].achieve_goal or "", own))
+        out.append((tg.scope(v).goal or "", own))
     for vertex in tg.achieve_carried.get(v, ()):
         try:
             test = achieve_test(vertex, gm, config)
@@ -248,11 +249,11 @@ def achieve_tests(tg: TaskGraph, v: int, gm: GoalModel, config: Configuration) -
             # (the reference object-picking mission has one: current_room.objects_picked)
             continue
         if test is not None:
-            out.append((vertex.achieve_goal or "", test))
+            out.append((vertex.goal or "", test))
     return out
 
 
-def unique_branch_valid(tg: TaskGraph, dec: Vertex, initial: State, gm: GoalModel, config: Configuration) -> bool:
+def unique_branch_valid(tg: TaskGraph, dec: DecompositionVertex, initial: State, gm: GoalModel, config: Configuration) -> bool:
     """§7.7: whether a decomposition of a unique-branch mission is a mission decomposition on its
     own: its preconditions hold in the initial state, and so does every achieve condition above
     its task once its effects are applied.  (The original skips the achieve conditions here,
@@ -263,7 +264,7 @@ def unique_branch_valid(tg: TaskGraph, dec: Vertex, initial: State, gm: GoalMode
     tests = []
     v = tg.vertices[dec.parent].parent
     while v >= 0:
-        test = achieve_test(tg.vertices[v], gm, config)
+        test = achieve_test(tg.scope(v), gm, config)
         if test is not None:
             tests.append(test)
         v = tg.vertices[v].parent
@@ -283,7 +284,7 @@ def mission_queue(tg: TaskGraph) -> list[int]:
     Trimming keeps only operators with two or more children (or an achieve condition), but an
     operator whose children were goal leaves (queries) can be left with fewer: it still scopes
     its subtree."""
-    return [v.index for v in tg.vertices if v.kind in (ATASK, OP)]
+    return [v.index for v in tg.vertices if isinstance(v, (TaskVertex, OperatorVertex))]
 
 
 def application_order(decompositions: Iterable[int]) -> list[int]:
@@ -312,7 +313,7 @@ class EffectScopes:
         """The decomposition vertices below ``v`` (its own, for a task), in vertex order."""
         if v not in self._subtree:
             tg = self.tg
-            if tg.vertices[v].kind == ATASK:
+            if isinstance(tg.vertices[v], TaskVertex):
                 self._subtree[v] = [d.index for d in tg.decompositions_of(v)]
             else:
                 self._subtree[v] = [d for c in tg.children(v) for d in self.subtree(c)]
@@ -358,7 +359,7 @@ def checks_parallel_conflicts(tg: TaskGraph, v: int) -> bool:
     """Whether operator ``v`` forbids conflicting effects: an AND-parallel ``#`` (an OR ``#``
     chooses one child, so its children never run together)."""
     vx = tg.vertices[v]
-    return vx.kind == OP and vx.content == "#" and not tg.is_or(v)
+    return isinstance(vx, OperatorVertex) and vx.content == "#" and not tg.is_or(v)
 
 
 def parallel_conflicts(v: int, scopes: EffectScopes, effects: Mapping[int, Effects]) -> list[ParallelConflict]:

@@ -1,0 +1,1 @@
+"""The data model: what the readers produce and the pipeline stages pass on."""

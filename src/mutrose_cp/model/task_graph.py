@@ -1,0 +1,276 @@
+"""The Task Graph's types (spec ``semantics.md`` §5): one frozen vertex type per kind, typed
+edges, and the graph itself, which :class:`TaskGraphBuilder` assembles and then freezes.
+
+Vertices are operators (``;``, ``#``, ``FALLBACK``), means-end goal nodes, task instances and
+their decompositions; edges are AND/OR refinements, context dependencies (CD) and execution
+constraints (EC).  A vertex's ``index`` is its position, which fixes the output keys
+``t0, t1, ...``; ``parent`` is -1 at the root.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import TYPE_CHECKING, ClassVar, Iterator, Mapping, NamedTuple, Sequence
+
+if TYPE_CHECKING:  # the types of the stages that produce a vertex's content
+    from ..conditions import Test
+    from ..expansion import TaskInstance
+    from ..htn import DecompositionPath, GroundPredicates
+    from ..query import Binding
+
+
+class VertexKind(StrEnum):
+    OPERATOR = "op"
+    GOAL = "goal"  # a means-end goal node (a goal refined by a single child)
+    TASK = "task"
+    DECOMPOSITION = "decomposition"
+
+
+class EdgeKind(StrEnum):
+    AND = "AND"
+    OR = "OR"
+    CD = "CD"  # context dependency: a decomposition that can make a task's context true
+    EC = "EC"  # execution constraint: tasks that share robots (Group/Divisible)
+
+
+@dataclass(frozen=True)
+class Decomposition:
+    """One HTN decomposition path of one task instance: ``AT1_1|2``."""
+
+    id: str
+    instance: TaskInstance
+    number: int  # 1-based path number
+    path: DecompositionPath
+    predicates: GroundPredicates
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Vertex:
+    index: int
+    parent: int  # -1 at the root
+    content: str  # operator symbol, goal id, instance id or decomposition id
+    group: bool = True
+    divisible: bool = True
+
+
+@dataclass(frozen=True, kw_only=True)
+class ScopeVertex(_Vertex):
+    """An operator or a means-end goal: a vertex that scopes the subtree of a goal."""
+
+    goal: str | None = None  # the goal the vertex stands for
+    forall: bool = False  # the parallel node over the copies of a forAll goal
+    achieve: bool = False  # the top node of an Achieve goal: its condition is checked here
+    var_maps: Mapping[str, Binding] = field(default_factory=dict)  # variable values at this node
+    # a creation condition false in the initial state that an earlier task can make true (§5.2)
+    contexts: tuple[Test, ...] = ()
+
+
+@dataclass(frozen=True, kw_only=True)
+class OperatorVertex(ScopeVertex):
+    kind: ClassVar[VertexKind] = VertexKind.OPERATOR
+
+
+@dataclass(frozen=True, kw_only=True)
+class GoalVertex(ScopeVertex):
+    kind: ClassVar[VertexKind] = VertexKind.GOAL
+
+
+@dataclass(frozen=True, kw_only=True)
+class TaskVertex(_Vertex):
+    kind: ClassVar[VertexKind] = VertexKind.TASK
+    instance: TaskInstance
+    # every enabled creation condition above the task: each must hold where the task starts
+    contexts: tuple[Test, ...] = ()
+
+
+@dataclass(frozen=True, kw_only=True)
+class DecompositionVertex(_Vertex):
+    kind: ClassVar[VertexKind] = VertexKind.DECOMPOSITION
+    decomposition: Decomposition
+
+    @property
+    def instance(self) -> TaskInstance:
+        return self.decomposition.instance
+
+
+Vertex = OperatorVertex | GoalVertex | TaskVertex | DecompositionVertex
+
+
+class ExecutionPartner(NamedTuple):
+    """The other end of an execution constraint, with the constraint's flags."""
+
+    task: int
+    group: bool
+    divisible: bool
+
+
+class Edge(NamedTuple):
+    source: int
+    target: int
+    kind: EdgeKind
+    group: bool = True  # EC edges only
+    divisible: bool = True
+
+
+class _Adjacency:
+    """The queries that both the builder and the frozen graph answer, over the vertices and
+    the indexes of the edges.  Edges are kept in plain adjacency lists in insertion order, which
+    the original's traversals depend on: large missions have hundreds of thousands of EC edges."""
+
+    vertices: Sequence[Vertex]
+    _succ: dict[int, list[tuple[int, EdgeKind]]]
+    _by_kind: dict[tuple[int, EdgeKind], list[int]]
+    _edge_kind: dict[tuple[int, int], EdgeKind]
+    # execution constraints are symmetric and numerous: task -> partners, in the order added
+    _ec: dict[int, list[ExecutionPartner]]
+    _ec_pairs: set[tuple[int, int]]
+    _decs: dict[int, list[DecompositionVertex]]
+
+    def out(self, v: int, *kinds: EdgeKind) -> list[int]:
+        """Successors of ``v`` through edges of the given kinds, in insertion order."""
+        if len(kinds) == 1:
+            return self._by_kind.get((v, kinds[0]), [])
+        return [u for u, k in self._succ[v] if k in kinds]
+
+    def children(self, v: int) -> list[int]:
+        """AND/OR successors in insertion order (a vertex refines into one kind only)."""
+        ands = self._by_kind.get((v, EdgeKind.AND))
+        ors = self._by_kind.get((v, EdgeKind.OR))
+        if ands and ors:
+            return self.out(v, EdgeKind.AND, EdgeKind.OR)
+        return ands or ors or []
+
+    def successors(self, v: int) -> list[tuple[int, EdgeKind]]:
+        """AND, OR and CD successors of ``v`` with the edge kind, in insertion order."""
+        return self._succ[v]
+
+    def is_or(self, v: int) -> bool:
+        return any(k == EdgeKind.OR for _, k in self._succ[v])
+
+    def edge_kind(self, a: int, b: int) -> EdgeKind:
+        return self._edge_kind[(a, b)]
+
+    def has_edge(self, a: int, b: int) -> bool:
+        return (a, b) in self._edge_kind or (a, b) in self._ec_pairs
+
+    def ec_partners(self, v: int) -> list[ExecutionPartner]:
+        """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
+        return self._ec.get(v, [])
+
+    def decompositions_of(self, task: int) -> list[DecompositionVertex]:
+        return self._decs.get(task, [])
+
+    def decompositions(self) -> list[DecompositionVertex]:
+        return [v for v in self.vertices if isinstance(v, DecompositionVertex)]
+
+    def tasks(self) -> list[TaskVertex]:
+        return [v for v in self.vertices if isinstance(v, TaskVertex)]
+
+    def scope(self, v: int) -> ScopeVertex:
+        """Vertex ``v``, which must be an operator or a means-end goal."""
+        vertex = self.vertices[v]
+        assert isinstance(vertex, ScopeVertex), vertex
+        return vertex
+
+    def task(self, v: int) -> TaskVertex:
+        """Vertex ``v``, which must be a task."""
+        vertex = self.vertices[v]
+        assert isinstance(vertex, TaskVertex), vertex
+        return vertex
+
+    def decomposition(self, d: int) -> DecompositionVertex:
+        """Vertex ``d``, which must be a decomposition."""
+        vertex = self.vertices[d]
+        assert isinstance(vertex, DecompositionVertex), vertex
+        return vertex
+
+
+@dataclass(frozen=True)
+class TaskGraph(_Adjacency):
+    """The finished Task Graph: vertices in index order and typed edges.  Nothing changes it
+    once built; the decomposers, the constraints and the outputs only read it."""
+
+    vertices: tuple[Vertex, ...]
+    _succ: dict[int, list[tuple[int, EdgeKind]]]
+    _by_kind: dict[tuple[int, EdgeKind], list[int]]
+    _edge_kind: dict[tuple[int, int], EdgeKind]
+    _ec: dict[int, list[ExecutionPartner]]
+    _ec_pairs: set[tuple[int, int]]
+    _decs: dict[int, list[DecompositionVertex]]
+    unique_branch: bool = False
+    # achieve goals that trimming removed (means-end goals, single-child chains above the root),
+    # by the kept vertex that now stands for their subtree: their conditions are checked there
+    achieve_carried: Mapping[int, tuple[ScopeVertex, ...]] = field(default_factory=dict)
+
+    def edges(self) -> Iterator[Edge]:
+        """All edges (EC ones in both directions), by source vertex and then insertion order."""
+        for a in range(len(self.vertices)):
+            for b, kind in self._succ[a]:
+                yield Edge(a, b, kind)
+            for p in self._ec.get(a, ()):
+                yield Edge(a, p.task, EdgeKind.EC, p.group, p.divisible)
+
+class TaskGraphBuilder(_Adjacency):
+    """A Task Graph under construction: vertices are added in index order, edges in the order
+    the construction rules (§5.1–§5.5) meet them; :meth:`freeze` hands out the result."""
+
+    vertices: list[Vertex]
+
+    def __init__(self) -> None:
+        self.vertices = []
+        self._succ = {}
+        self._by_kind = {}
+        self._edge_kind = {}
+        self._ec = {}
+        self._ec_pairs = set()
+        self._decs = {}
+        self.achieve_carried: dict[int, list[ScopeVertex]] = {}
+
+    @property
+    def next_index(self) -> int:
+        return len(self.vertices)
+
+    def add(self, vertex: Vertex) -> Vertex:
+        """Append ``vertex``, whose index must be :attr:`next_index`."""
+        assert vertex.index == len(self.vertices), (vertex.index, len(self.vertices))
+        self.vertices.append(vertex)
+        self._succ[vertex.index] = []
+        if isinstance(vertex, DecompositionVertex):
+            self._decs.setdefault(vertex.parent, []).append(vertex)
+        return vertex
+
+    def replace(self, vertex: DecompositionVertex) -> None:
+        """Put a changed decomposition vertex in place of the one with its index."""
+        old = self.decomposition(vertex.index)
+        siblings = self._decs[old.parent]
+        siblings[siblings.index(old)] = vertex
+        self.vertices[vertex.index] = vertex
+
+    def add_edge(self, a: int, b: int, kind: EdgeKind) -> None:
+        """An AND, OR or CD edge; adding an existing edge again changes its kind in place."""
+        old = self._edge_kind.get((a, b))
+        if old is None:
+            self._succ[a].append((b, kind))
+            self._by_kind.setdefault((a, kind), []).append(b)
+        elif old != kind:
+            self._succ[a] = [(u, kind if u == b else k) for u, k in self._succ[a]]
+            self._by_kind[(a, old)].remove(b)
+            self._by_kind.setdefault((a, kind), []).append(b)
+        self._edge_kind[(a, b)] = kind
+
+    def add_ec(self, a: int, b: int, group: bool, divisible: bool) -> None:
+        """An execution constraint between task vertices ``a`` and ``b`` (both directions)."""
+        self._ec.setdefault(a, []).append(ExecutionPartner(b, group, divisible))
+        self._ec.setdefault(b, []).append(ExecutionPartner(a, group, divisible))
+        self._ec_pairs.add((a, b))
+        self._ec_pairs.add((b, a))
+
+    def add_ec_direction(self, a: int, partner: ExecutionPartner) -> None:
+        """One direction of an execution constraint (trimming keeps each direction's order)."""
+        self._ec.setdefault(a, []).append(partner)
+        self._ec_pairs.add((a, partner.task))
+
+    def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
+        return TaskGraph(tuple(self.vertices), self._succ, self._by_kind, self._edge_kind, self._ec, self._ec_pairs,
+                         self._decs, unique_branch=unique_branch,
+                         achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})
