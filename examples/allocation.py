@@ -253,7 +253,7 @@ def lp_bound(dm: DecompositionModel, robots: list[Robot], durations: dict[str, i
     import scipy.sparse as sp
     import clarabel
 
-    from mutrose_cp.solve.encoding import FALSE, TRUE
+    from mutrose_cp.solve.boolean_model import FALSE, TRUE
 
     t0 = time.perf_counter()
     enc = dm.encoding

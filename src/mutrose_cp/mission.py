@@ -239,7 +239,7 @@ class Mission:
 
     def decomposition_model(self):
         """The whole decomposition space as one CP-SAT model, for embedding (see ``api.py``)."""
-        from .api import DecompositionModel
+        from .solve.embedding import DecompositionModel
 
         return DecompositionModel.build(self)
 

@@ -20,7 +20,25 @@ from typing import Callable, Iterator, Mapping, Sequence
 from ortools.sat.python import cp_model
 
 from ..errors import MissionError, NoDecompositionError
-from .encoding import FALSE, TRUE, BoolModel, Encoding, Lit, Record
+from .boolean_model import (
+    FALSE,
+    TRUE,
+    Const,
+    AndOf,
+    BoolModel,
+    Clause,
+    Compare,
+    Exactly,
+    Lit,
+    NumericEffectKind,
+    OrOf,
+    Record,
+    ValueAfter,
+)
+from .encoding import Encoding
+
+#: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation.
+CpLiteral = cp_model.IntVar | cp_model.NotBooleanVariable
 from .run import run_solver
 
 ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
@@ -30,15 +48,25 @@ ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a compo
 # Posting records to CP-SAT
 
 
+_COMPARISONS: dict[str, Callable[[cp_model.IntVar, int], tuple[cp_model.BoundedLinearExpression, cp_model.BoundedLinearExpression]]] = {
+    "=": lambda x, b: (x == b, x != b),
+    "<>": lambda x, b: (x != b, x == b),
+    ">": lambda x, b: (x > b, x <= b),
+    "<": lambda x, b: (x < b, x >= b),
+    ">=": lambda x, b: (x >= b, x < b),
+    "<=": lambda x, b: (x <= b, x > b),
+}  # op -> (the comparison, its negation)
+
+
 class CpBuilder:
-    """Posts :class:`Record` objects to a ``CpModel`` (the whole model or one component)."""
+    """Posts records (:mod:`.boolean_model`) to a ``CpModel`` (the whole model or one component)."""
 
     def __init__(self, bm: BoolModel, model: cp_model.CpModel | None = None) -> None:
         self.bm = bm
         self.model = model or cp_model.CpModel()
         self.vars: dict[int, cp_model.IntVar] = {}
 
-    def var(self, v: int):
+    def var(self, v: int) -> cp_model.IntVar:
         if v not in self.vars:
             iv = self.bm.ints.get(v)
             if iv is not None:
@@ -47,69 +75,62 @@ class CpBuilder:
                 self.vars[v] = self.model.NewBoolVar(self.bm.names[v])
         return self.vars[v]
 
-    def lit(self, l: Lit):
-        if l == TRUE:
+    def lit(self, l: Lit) -> CpLiteral:
+        if l is TRUE:
             return self.model.NewConstant(1)
-        if l == FALSE:
+        if l is FALSE:
             return self.model.NewConstant(0)
-        assert isinstance(l, int)
         return self.var(l) if l > 0 else self.var(-l).Not()
 
-    def post(self, r: Record, enforce=None):
+    def post(self, r: Record, enforce: CpLiteral | None = None) -> cp_model.Constraint | None:
+        """Post ``r``; with ``enforce``, the record's defining constraint holds only when
+        ``enforce`` is true (how :func:`explain` names the records of a conflict)."""
         m = self.model
-        lits = [self.lit(l) for l in r.lits]
-        if r.kind == "clause":
-            c = m.AddBoolOr(lits) if lits else m.AddBoolOr([m.NewConstant(0)])
-        elif r.kind == "sum_eq":
-            target = r.target
-            if target == TRUE:
-                c = m.AddExactlyOne(lits) if enforce is None else m.Add(sum(lits) == 1)
-            elif target == FALSE:
-                c = m.Add(sum(lits) == 0)
-            else:
-                c = m.Add(sum(lits) == self.lit(target))
-        elif r.kind == "and_eq":
-            t = self.lit(r.target)
-            m.AddBoolAnd(lits).OnlyEnforceIf(t)
-            c = m.AddBoolOr([x.Not() for x in lits] + [t])
-        elif r.kind == "or_eq":
-            t = self.lit(r.target)
-            m.AddBoolOr(lits).OnlyEnforceIf(t)
-            for x in lits:
-                m.AddImplication(x, t)
-            c = None
-        elif r.kind == "int_sel":
-            xw, known = r.lits
-            prev_var, prev_const, amount, kind = r.extra
-            target = self.var(r.target)  # type: ignore[arg-type]
-            cur_e = self.var(prev_var) if prev_var is not None else prev_const
-            xw_l, known_l = self.lit(xw), self.lit(known)
-            if kind == "assign":
-                m.Add(target == amount).OnlyEnforceIf(xw_l)
-            else:
-                # adding to an unknown value starts from the amount itself
-                m.Add(target == cur_e + amount).OnlyEnforceIf([xw_l, known_l])
-                m.Add(target == amount).OnlyEnforceIf([xw_l, known_l.Not()])
-            c = m.Add(target == cur_e).OnlyEnforceIf(xw_l.Not())
-        elif r.kind == "cmp_eq":
-            sat = lits[0]
-            op, bound = r.extra
-            target = self.var(r.target)  # type: ignore[arg-type]
-            pos, negc = {
-                "=": (target == bound, target != bound),
-                "<>": (target != bound, target == bound),
-                ">": (target > bound, target <= bound),
-                "<": (target < bound, target >= bound),
-                ">=": (target >= bound, target < bound),
-                "<=": (target <= bound, target > bound),
-            }[op]
-            m.Add(pos).OnlyEnforceIf(sat)
-            c = m.Add(negc).OnlyEnforceIf(sat.Not())
-        else:  # pragma: no cover - records are produced by the encoder only
-            raise ValueError(r.kind)
+        c: cp_model.Constraint | None
+        match r:
+            case Clause(lits=lits):
+                c = m.AddBoolOr([self.lit(l) for l in lits] or [m.NewConstant(0)])
+            case Exactly(lits=lits, target=target):
+                choices = [self.lit(l) for l in lits]
+                if target is TRUE:
+                    c = m.AddExactlyOne(choices) if enforce is None else m.Add(sum(choices) == 1)
+                elif target is FALSE:
+                    c = m.Add(sum(choices) == 0)
+                else:
+                    c = m.Add(sum(choices) == self.lit(target))
+            case AndOf(lits=lits, target=target):
+                parts, t = [self.lit(l) for l in lits], self.var(target)
+                m.AddBoolAnd(parts).OnlyEnforceIf(t)
+                c = m.AddBoolOr([x.Not() for x in parts] + [t])
+            case OrOf(lits=lits, target=target):
+                parts, t = [self.lit(l) for l in lits], self.var(target)
+                m.AddBoolOr(parts).OnlyEnforceIf(t)
+                for x in parts:
+                    m.AddImplication(x, t)
+                c = None
+            case ValueAfter():
+                c = self._value_after(r)
+            case Compare(holds=holds, value=value, op=op, bound=bound):
+                sat = self.lit(holds)
+                comparison, negation = _COMPARISONS[op](self.var(value), bound)
+                m.Add(comparison).OnlyEnforceIf(sat)
+                c = m.Add(negation).OnlyEnforceIf(sat.Not())
         if enforce is not None and c is not None:
             c.OnlyEnforceIf(enforce)
         return c
+
+    def _value_after(self, r: ValueAfter) -> cp_model.Constraint:
+        m = self.model
+        target = self.var(r.target)
+        before = self.var(r.previous) if r.previous is not None else r.previous_value
+        written, known = self.lit(r.writer), self.lit(r.known)
+        if r.effect == NumericEffectKind.ASSIGN:
+            m.Add(target == r.amount).OnlyEnforceIf(written)
+        else:
+            # adding to an unknown value starts from the amount itself
+            m.Add(target == before + r.amount).OnlyEnforceIf([written, known])
+            m.Add(target == r.amount).OnlyEnforceIf([written, known.Not()])
+        return m.Add(target == before).OnlyEnforceIf(written.Not())
 
 
 # ---------------------------------------------------------------------------------------------
@@ -147,7 +168,7 @@ def _components(enc: Encoding) -> list[Component]:
     for r in bm.records:
         vs = r.variables()
         if not vs:  # a constant record: an empty clause or an exactly-one over nothing
-            if not (r.kind == "sum_eq" and r.target == FALSE):
+            if not (isinstance(r, Exactly) and r.target is FALSE):
                 constant.append(Component([r], [], solutions=[], count=0))
             continue
         groups.setdefault(find(vs[0]), Component([], [])).records.append(r)
@@ -179,20 +200,21 @@ class _Collector(cp_model.CpSolverSolutionCallback):
 
 def _simple_choice(comp: Component) -> list[frozenset[int]] | None:
     """Solutions of a component that is one exactly-one choice plus unit exclusions."""
-    sums = [r for r in comp.records if r.kind == "sum_eq"]
-    if len(sums) != 1 or sums[0].target != TRUE:
+    sums = [r for r in comp.records if isinstance(r, Exactly)]
+    if len(sums) != 1 or sums[0].target is not TRUE:
         return None
     options = list(sums[0].lits)
     excluded: set[int] = set()
     for r in comp.records:
         if r is sums[0]:
             continue
-        if r.kind == "clause" and len(r.lits) == 1 and isinstance(r.lits[0], int) and r.lits[0] < 0:
-            excluded.add(-r.lits[0])
-        elif r.kind == "clause" and len(r.lits) == 0:
-            return []
-        else:
-            return None
+        match r:
+            case Clause(lits=(int(excluded_lit),)) if excluded_lit < 0:
+                excluded.add(-excluded_lit)
+            case Clause(lits=()):
+                return []
+            case _:
+                return None
     if not all(isinstance(l, int) and l > 0 for l in options):
         return None
     return [frozenset([v]) for v in options if v not in excluded]
@@ -340,7 +362,7 @@ class DecompositionSpace:
         return table
 
 
-def _signature(bm: BoolModel, comp: Component) -> tuple[tuple, list[int]]:
+def _signature(bm: BoolModel, comp: Component) -> tuple[tuple[object, ...], list[int]]:
     """A key equal for components that are the same up to renaming their variables (one per
     delivery or room of a forAll), and the variables in canonical order."""
     canon: dict[int, int] = {}
@@ -350,22 +372,35 @@ def _signature(bm: BoolModel, comp: Component) -> tuple[tuple, list[int]]:
             canon[v] = len(canon)
         return canon[v]
 
-    def lit(l):
+    def lit(l: Lit) -> int | Const:
         if isinstance(l, int):
             return cid(abs(l)) if l > 0 else -cid(abs(l)) - 1_000_000
         return l
 
     parts = []
     for r in comp.records:
-        extra = r.extra
-        if r.kind == "int_sel":
-            prev, const, amount, kind = extra
-            extra = (None if prev is None else cid(prev), const, amount, kind)
-        ints = tuple((bm.ints[abs(v)].lo, bm.ints[abs(v)].hi) for v in r.variables() if abs(v) in bm.ints)
-        parts.append((r.kind, tuple(lit(l) for l in r.lits), lit(r.target), extra, ints))
+        ints = tuple((bm.ints[v].lo, bm.ints[v].hi) for v in r.variables() if v in bm.ints)
+        parts.append((r.kind, _canonical(r, lit, cid), ints))
     order = sorted(canon, key=canon.__getitem__)
     key = (tuple(parts), tuple(canon[v] for v in comp.choice_vars if v in canon))
     return key, order
+
+
+def _canonical(r: Record, lit: Callable[[Lit], int | Const], cid: Callable[[int], int]) -> tuple[object, ...]:
+    """The record's content with its variables renamed (``lit`` for literals, ``cid`` for
+    integer variables), in the order the variables are met; labels are left out."""
+    match r:
+        case Clause(lits=lits):
+            return tuple(lit(l) for l in lits),
+        case Exactly(lits=lits, target=target):
+            return tuple(lit(l) for l in lits), lit(target)
+        case AndOf(lits=lits, target=target) | OrOf(lits=lits, target=target):
+            return tuple(lit(l) for l in lits), lit(target)
+        case ValueAfter():
+            return (lit(r.writer), lit(r.known), cid(r.target), None if r.previous is None else cid(r.previous),
+                    r.previous_value, r.amount, r.effect)
+        case Compare(holds=holds, value=value, op=op, bound=bound):
+            return lit(holds), cid(value), op, bound
 
 
 def build_space(enc: Encoding, keep: bool = True,

@@ -14,7 +14,7 @@ auxiliary variable is defined by an equivalence, so each solution is a distinct 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable, Sequence
+from typing import Iterable
 
 from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
@@ -23,6 +23,7 @@ from ..io.goal_model import GoalModel
 from ..io.hddl import Comparison, Domain, Literal
 from ..model.task_graph import TaskGraph, TaskVertex
 from ..world import InitialState
+from .boolean_model import FALSE, TRUE, BoolModel, Compare, Exactly, Lit, NumericEffectKind, ValueAfter, neg
 from .semantics import (
     ConstraintIndex,
     EffectScopes,
@@ -40,110 +41,7 @@ from .semantics import (
     unique_branch_valid,
 )
 
-TRUE = "TRUE"
-FALSE = "FALSE"
-Lit = int | str  # variable id (negative = negation) or the constants TRUE / FALSE
 SCALE = 1000  # numeric values are compared as integers in thousandths
-
-
-def neg(lit: Lit) -> Lit:
-    if lit == TRUE:
-        return FALSE
-    if lit == FALSE:
-        return TRUE
-    return -lit  # type: ignore[operator]
-
-
-@dataclass
-class Record:
-    """One constraint of the model.  ``kind``:
-
-    * ``clause``: OR of ``lits``;
-    * ``sum_eq``: sum of ``lits`` == ``target``;
-    * ``and_eq`` / ``or_eq``: ``target`` <=> AND / OR of ``lits``;
-    * ``int_eq``: integer ``target`` == ``base`` + sum of ``terms`` (literal, coefficient);
-    * ``int_sel``: integer ``target`` is the value after writer ``lits[0]`` (``lits[1]``: the value
-      before was known): ``extra = (previous var or None, previous constant, amount, kind)``;
-    * ``cmp_eq``: ``lits[0]`` <=> (integer ``target`` ``op`` ``bound``).
-    """
-
-    kind: str
-    lits: tuple[Lit, ...] = ()
-    target: Lit | None = None
-    label: str = ""
-    extra: tuple = ()  # constants of int_sel / cmp_eq
-    refs: tuple[int, ...] = ()  # further integer variables the record reads
-
-    def variables(self) -> list[int]:
-        out = [abs(l) for l in self.lits if isinstance(l, int)]
-        if isinstance(self.target, int):
-            out.append(abs(self.target))
-        out.extend(self.refs)
-        return out
-
-
-@dataclass
-class IntVar:
-    lo: int
-    hi: int
-
-
-@dataclass
-class BoolModel:
-    """Variables and records; variable ids start at 1."""
-
-    names: list[str] = field(default_factory=lambda: [""])
-    ints: dict[int, IntVar] = field(default_factory=dict)
-    records: list[Record] = field(default_factory=list)
-
-    def new_bool(self, name: str) -> int:
-        self.names.append(name)
-        return len(self.names) - 1
-
-    def new_int(self, name: str, lo: int, hi: int) -> int:
-        v = self.new_bool(name)
-        self.ints[v] = IntVar(lo, hi)
-        return v
-
-    # --- helpers that fold constants ------------------------------------------------------------
-    def clause(self, lits: Iterable[Lit], label: str = "") -> None:
-        kept: list[Lit] = []
-        for l in lits:
-            if l == TRUE:
-                return
-            if l != FALSE and l not in kept:
-                kept.append(l)
-        self.records.append(Record("clause", tuple(kept), label=label))
-
-    def and_of(self, lits: Sequence[Lit], name: str) -> Lit:
-        kept = []
-        for l in lits:
-            if l == FALSE:
-                return FALSE
-            if l != TRUE and l not in kept:
-                kept.append(l)
-        if not kept:
-            return TRUE
-        if len(kept) == 1:
-            return kept[0]
-        v = self.new_bool(name)
-        self.records.append(Record("and_eq", tuple(kept), v))
-        return v
-
-    def or_of(self, lits: Sequence[Lit], name: str) -> Lit:
-        kept = []
-        for l in lits:
-            if l == TRUE:
-                return TRUE
-            if l != FALSE and l not in kept:
-                kept.append(l)
-        if not kept:
-            return FALSE
-        if len(kept) == 1:
-            return kept[0]
-        v = self.new_bool(name)
-        self.records.append(Record("or_eq", tuple(kept), v))
-        return v
 
 
 @dataclass
@@ -219,7 +117,7 @@ class Encoder:
                 if not unique_branch_valid(self.tg, d, self.initial, self.gm, self.config):
                     self.m.clause([neg(lit)], self._label(f"pre:{d.content}", f"{d.content}: a precondition is false in the "
                                                           "initial world state, or an achieve condition after it"))
-        self.m.records.append(Record("sum_eq", tuple(all_x), TRUE, label="unique-branch"))
+        self.m.records.append(Exactly(tuple(all_x), TRUE, label="unique-branch"))
         return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
 
     def _label(self, key: str, text: str) -> str:
@@ -240,7 +138,7 @@ class Encoder:
                 lit = self.m.new_bool(d.content)
                 self.x[d.index] = lit
                 lits.append(lit)
-            self.m.records.append(Record("sum_eq", tuple(lits), active,
+            self.m.records.append(Exactly(tuple(lits), active,
                                          label=self._label(f"task:{vx.content}", f"task instance {vx.content} needs exactly one decomposition")))
             return
         children = tg.children(v)
@@ -251,7 +149,7 @@ class Encoder:
                 self.or_lits[(v, c)] = lit
                 lits.append(lit)
                 self._choices(c, lit)
-            self.m.records.append(Record("sum_eq", tuple(lits), active, label=f"or:{v}"))
+            self.m.records.append(Exactly(tuple(lits), active, label=f"or:{v}"))
         else:
             for c in children:
                 self._choices(c, active)
@@ -306,13 +204,13 @@ class Encoder:
         for w, kind, amount in scaled:
             xw = self.x[w]
             nxt = m.new_int(f"val({atom})@{w}", -span, span)
-            m.records.append(Record("int_sel", (xw, known), nxt, extra=(prev_var, prev_const, amount, kind),
-                                    refs=() if prev_var is None else (prev_var,)))
+            m.records.append(ValueAfter(xw, known, nxt, prev_var, prev_const, amount, NumericEffectKind(kind)))
             known = m.or_of([known, xw], f"known({atom})@{w}")
             prev_var = nxt
         cur = prev_var
         sat = m.new_bool(f"cmp({atom}{op}{bound})")
-        m.records.append(Record("cmp_eq", (sat,), cur, extra=(op, round(bound * SCALE))))
+        assert cur is not None
+        m.records.append(Compare(sat, cur, op, round(bound * SCALE)))
         return m.or_of([neg(known), sat], name)
 
     def _state_test(self, test: Test, decs: set[int], name: str) -> Lit:

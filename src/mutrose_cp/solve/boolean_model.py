@@ -1,0 +1,205 @@
+"""The solver-neutral boolean model of the decomposition space: variables and typed records.
+
+The encoder (:mod:`.encoding`) writes the rules of valid decompositions as records; the CP-SAT
+layer (:mod:`.cpsat`) splits them into independent components and posts each one.  Keeping this
+small form between the two lets components be found, compared up to renaming and solved one by
+one.  Literals are variable ids (negative for the negation) or one of two constants, which the
+helpers fold away while the model is built.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum, StrEnum
+from typing import ClassVar, Iterable, Sequence
+
+
+class Const(Enum):
+    """A literal whose value is known while the model is built."""
+
+    TRUE = "TRUE"
+    FALSE = "FALSE"
+
+
+TRUE, FALSE = Const.TRUE, Const.FALSE
+Lit = int | Const  # variable id (negative = negation) or a constant
+
+
+def neg(lit: Lit) -> Lit:
+    if lit is TRUE:
+        return FALSE
+    if lit is FALSE:
+        return TRUE
+    return -lit
+
+
+def _ids(lits: Iterable[Lit]) -> list[int]:
+    return [abs(l) for l in lits if isinstance(l, int)]
+
+
+class RecordKind(StrEnum):
+    CLAUSE = "clause"
+    EXACTLY = "sum_eq"
+    AND = "and_eq"
+    OR = "or_eq"
+    VALUE_AFTER = "int_sel"
+    COMPARE = "cmp_eq"
+
+
+class NumericEffectKind(StrEnum):
+    ASSIGN = "assign"
+    INCREASE = "increase"  # decreases are increases by a negative amount
+
+
+@dataclass(frozen=True, slots=True)
+class Clause:
+    """OR of ``lits``."""
+
+    kind: ClassVar[RecordKind] = RecordKind.CLAUSE
+    lits: tuple[Lit, ...]
+    label: str = ""  # a key of Encoding.labels: names the rule when explaining infeasibility
+
+    def variables(self) -> list[int]:
+        return _ids(self.lits)
+
+
+@dataclass(frozen=True, slots=True)
+class Exactly:
+    """The number of true ``lits`` equals ``target`` (0 or 1): exactly one of the choices is
+    made when ``target`` holds, none otherwise."""
+
+    kind: ClassVar[RecordKind] = RecordKind.EXACTLY
+    lits: tuple[Lit, ...]
+    target: Lit
+    label: str = ""
+
+    def variables(self) -> list[int]:
+        return _ids(self.lits + (self.target,))
+
+
+@dataclass(frozen=True, slots=True)
+class AndOf:
+    """``target`` <=> AND of ``lits`` (an auxiliary variable defined by an equivalence)."""
+
+    kind: ClassVar[RecordKind] = RecordKind.AND
+    lits: tuple[Lit, ...]
+    target: int
+    label: str = ""
+
+    def variables(self) -> list[int]:
+        return _ids(self.lits) + [self.target]
+
+
+@dataclass(frozen=True, slots=True)
+class OrOf:
+    """``target`` <=> OR of ``lits``."""
+
+    kind: ClassVar[RecordKind] = RecordKind.OR
+    lits: tuple[Lit, ...]
+    target: int
+    label: str = ""
+
+    def variables(self) -> list[int]:
+        return _ids(self.lits) + [self.target]
+
+
+@dataclass(frozen=True, slots=True)
+class ValueAfter:
+    """Integer ``target`` is a numeric atom's value after one writer: if ``writer`` is chosen,
+    the value it assigns, or the value before plus ``amount`` (just ``amount`` when the value
+    before is unknown, ``known`` false); otherwise the value before.  The value before is the
+    integer variable ``previous``, or the constant ``previous_value`` for the first writer."""
+
+    kind: ClassVar[RecordKind] = RecordKind.VALUE_AFTER
+    writer: Lit
+    known: Lit
+    target: int
+    previous: int | None
+    previous_value: int
+    amount: int
+    effect: NumericEffectKind
+    label: str = ""
+
+    def variables(self) -> list[int]:
+        return _ids((self.writer, self.known)) + [self.target] + ([] if self.previous is None else [self.previous])
+
+
+@dataclass(frozen=True, slots=True)
+class Compare:
+    """``holds`` <=> (integer ``value`` ``op`` ``bound``)."""
+
+    kind: ClassVar[RecordKind] = RecordKind.COMPARE
+    holds: Lit
+    value: int
+    op: str  # "=", "<>", ">", "<", ">=", "<="
+    bound: int
+    label: str = ""
+
+    def variables(self) -> list[int]:
+        return _ids((self.holds,)) + [self.value]
+
+
+Record = Clause | Exactly | AndOf | OrOf | ValueAfter | Compare
+
+
+@dataclass
+class IntRange:
+    lo: int
+    hi: int
+
+
+@dataclass
+class BoolModel:
+    """Variables and records; variable ids start at 1 (id 0 is unused, so negation works)."""
+
+    names: list[str] = field(default_factory=lambda: [""])
+    ints: dict[int, IntRange] = field(default_factory=dict)
+    records: list[Record] = field(default_factory=list)
+
+    def new_bool(self, name: str) -> int:
+        self.names.append(name)
+        return len(self.names) - 1
+
+    def new_int(self, name: str, lo: int, hi: int) -> int:
+        v = self.new_bool(name)
+        self.ints[v] = IntRange(lo, hi)
+        return v
+
+    # --- helpers that fold constants ------------------------------------------------------------
+    def clause(self, lits: Iterable[Lit], label: str = "") -> None:
+        kept: list[Lit] = []
+        for l in lits:
+            if l is TRUE:
+                return
+            if l is not FALSE and l not in kept:
+                kept.append(l)
+        self.records.append(Clause(tuple(kept), label))
+
+    def and_of(self, lits: Sequence[Lit], name: str) -> Lit:
+        kept: list[Lit] = []
+        for l in lits:
+            if l is FALSE:
+                return FALSE
+            if l is not TRUE and l not in kept:
+                kept.append(l)
+        if not kept:
+            return TRUE
+        if len(kept) == 1:
+            return kept[0]
+        v = self.new_bool(name)
+        self.records.append(AndOf(tuple(kept), v))
+        return v
+
+    def or_of(self, lits: Sequence[Lit], name: str) -> Lit:
+        kept: list[Lit] = []
+        for l in lits:
+            if l is TRUE:
+                return TRUE
+            if l is not FALSE and l not in kept:
+                kept.append(l)
+        if not kept:
+            return FALSE
+        if len(kept) == 1:
+            return kept[0]
+        v = self.new_bool(name)
+        self.records.append(OrOf(tuple(kept), v))
+        return v
