@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import argparse
 import gc
-import itertools
 import json
 import os
 import signal
@@ -18,11 +17,12 @@ from pathlib import Path
 from typing import Sequence
 
 from . import __version__
-from .errors import MissionError, NoDecompositionError
+from .errors import MissionError
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
-from .output import SplitListing
+from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult
+from .solve.optimize import CostModel
 
 
 def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
@@ -137,95 +137,28 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return 0 if report.valid else 1
 
 
-MAX_COST = 10**12  # per action or method: sums over large missions stay far inside 64 bits
+def _request(args: argparse.Namespace) -> DecompositionRequest:
+    """The decompose options as a library request (their combinations are checked before)."""
+    return DecompositionRequest(
+        algorithm=Algorithm(args.algorithm),
+        limit=None if args.limit == 0 else args.limit,
+        sample=args.sample,
+        seed=args.seed,
+        optimize=args.optimize,
+        costs=CostModel.read(args.costs) if args.optimize and args.costs else CostModel(),
+        explain=args.explain,
+    )
 
 
-def _cost(value: object, where: str) -> int:
-    """A cost from the cost file: a whole number (``3`` or ``3.0``), at most ``MAX_COST``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise MissionError(f"expected a whole number as cost, got {json.dumps(value)}", where)
-    if not abs(value) <= MAX_COST:  # also infinity (JSON 1e309) and NaN
-        raise MissionError(f"cost {value!r} is out of range: costs go from -{MAX_COST} to {MAX_COST}", where)
-    if isinstance(value, float) and not value.is_integer():
-        raise MissionError(f"expected a whole number as cost, got {value!r}", where)
-    return int(value)
-
-
-def _costs(mission: Mission, path: str | None) -> dict[int, int]:
-    """Cost of each decomposition vertex: its number of actions, or the sum of per-action and
-    per-method costs from a JSON cost file ``{"actions": {name: cost}, "methods": {name: cost},
-    "default_action": 1}``."""
-    from .htn import TreeNode
-
-    actions: dict[str, int] = {}
-    methods: dict[str, int] = {}
-    default = 1
-    if path:
-        from .io.text import decode_utf8, read_bytes
-
-        text = decode_utf8(read_bytes(path, "cost"), path, "cost file")
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as err:
-            raise MissionError(f"invalid JSON: {err.msg}", f"{path}:{err.lineno}:{err.colno}") from None
-        if not isinstance(data, dict) or not all(isinstance(data.get(k, {}), dict) for k in ("actions", "methods")):
-            raise MissionError('expected an object {"actions": {name: cost}, "methods": {name: cost}}', path)
-        actions = {str(k): _cost(v, f"{path}: actions.{k}") for k, v in data.get("actions", {}).items()}
-        methods = {str(k): _cost(v, f"{path}: methods.{k}") for k, v in data.get("methods", {}).items()}
-        default = _cost(data.get("default_action", 1), f"{path}: default_action")
-
-    def method_cost(node: TreeNode) -> int:
-        own = methods.get(node.name, 0) if node.kind == "method" else 0
-        return own + sum(method_cost(c) for c in node.children)
-
-    out = {}
-    for d in mission.task_graph.decompositions():
-        dec = d.decomposition
-        out[d.index] = sum(actions.get(a.name, default) for a in dec.path.actions) + method_cost(dec.path.tree)
-    return out
-
-
-def _decompositions(args: argparse.Namespace, mission: Mission, progress) -> tuple[object, int, dict | None, str]:
-    """The mission decompositions to write, their total number, the space section and a note."""
-    if not mission.task_graph.tasks():
-        if not args.quiet:
-            print("warning: the mission has no task instances (no entity of the world matched its queries): "
-                  "nothing to decompose", file=sys.stderr)
-        return [], 0, ({"count": "0", "components": []} if args.algorithm == "cpsat" else None), ""
-    if args.algorithm == "exploratory":
-        found = mission.exploratory(progress)
-        if not found:
-            raise NoDecompositionError("no valid mission decomposition")
-        return found, len(found), None, ""
-    from .solve.cpsat import explain, minimize
-
-    space = mission.decomposition_space(progress)
-    total = space.count
-    if total == 0:
-        # a conflicting set of constraints, from CP-SAT assumptions, names what is responsible
-        reasons = explain(mission.encoding(explain=True))
-        shown = reasons if args.explain else reasons[:3]
-        detail = "; ".join(shown) or "the goal model's structure admits no combination"
-        more = "" if args.explain or len(reasons) <= 3 else f" (and {len(reasons) - 3} more: --explain lists all)"
-        raise NoDecompositionError(f"no valid mission decomposition: {detail}{more}", str(mission.goal_model.source))
-    key = {d.index: f"t{i}" for i, d in enumerate(mission.task_graph.decompositions())}
-    section = {"count": str(total), "components": space.component_table(key.__getitem__)}
-    if args.optimize:
-        costs = _costs(mission, args.costs)
-        best = space.minimize(costs)
-        chosen, cost = best if best is not None else minimize(mission.encoding(), costs)
-        section["optimum"] = {"cost": str(cost), "decomposition": [key[d] for d in sorted(chosen)]}
-        return [sorted(chosen)], total, section, f", optimum cost {cost}"
-    if args.sample is not None:
-        return space.sample(args.sample, args.seed), total, section, f", {args.sample} sampled (seed {args.seed})"
-    limit = None if args.limit == 0 else args.limit
-    listed = min(total, limit) if limit is not None else total
-    note = f", first {listed} listed" if listed < total else ""
-    split = space.split_listing(limit)
-    if split is not None:
-        prefix, parts = split
-        return SplitListing(prefix, itertools.islice(parts, limit)), total, section, note
-    return itertools.islice(iter(space), limit), total, section, note
+def _note(request: DecompositionRequest, result: DecompositionResult) -> str:
+    """What the summary line says about the listed decompositions."""
+    if result.optimum is not None:
+        return f", optimum cost {result.optimum[1]}"
+    if request.sample is not None:
+        return f", {request.sample} sampled (seed {request.seed})"
+    if result.listed is not None:
+        return f", first {result.listed} listed"
+    return ""
 
 
 def cmd_decompose(args: argparse.Namespace) -> int:
@@ -235,13 +168,13 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     if args.algorithm == "exploratory":
         used = [o for o, v in (("--optimize", args.optimize), ("--sample", args.sample is not None), ("--explain", args.explain),
-                                ("--limit", args.limit != 1000)) if v]
+                                ("--limit", args.limit != DEFAULT_LIMIT)) if v]
         if used:
             raise MissionError(f"{', '.join(used)} {'needs' if len(used) == 1 else 'need'} the CP-SAT decomposer "
                                "(the default): drop --algorithm exploratory")
     if args.output == "-" and args.json_summary:
         raise MissionError("-o - writes the output to standard output: drop --json-summary, which prints there too")
-    if args.sample is not None and (args.optimize or args.limit != 1000):
+    if args.sample is not None and (args.optimize or args.limit != DEFAULT_LIMIT):
         raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     mission.progress = _Progress(not args.quiet).stage
@@ -251,8 +184,16 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     with phase("expanding the mission"):
         tg = mission.task_graph
         constraints = mission.constraints
+    request = _request(args)
+    if not tg.tasks() and not args.quiet:
+        print("warning: the mission has no task instances (no entity of the world matched its queries): "
+              "nothing to decompose", file=sys.stderr)
     with phase("solving"):
-        decompositions, total, section, note = _decompositions(args, mission, progress)
+        result = mission.decompose(request, progress)
+    decompositions, total = result.decompositions, result.total
+    key = {d.index: f"t{i}" for i, d in enumerate(tg.decompositions())}
+    section = result.space_section(key.__getitem__)
+    note = _note(request, result)
     if args.output:
         out_path = Path(args.output)
     elif folder is not None and not Path(mission.config.output.file_path).is_absolute():

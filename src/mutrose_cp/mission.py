@@ -12,7 +12,7 @@ import sys
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any, Callable, TypeVar
+from typing import TYPE_CHECKING, Any, Callable, TypeVar
 
 from .constraints import Constraint, generate_constraints
 from .errors import MissionError
@@ -24,6 +24,12 @@ from .io.hddl import Domain, load_domain
 from .io.knowledge import WorldKnowledge, load_knowledge
 from .taskgraph import TaskGraph, build_task_graph
 from .world import InitialState, build_initial_state
+
+if TYPE_CHECKING:  # the solvers import OR-Tools, which takes a while: loaded when first used
+    from .solve.cpsat import DecompositionSpace
+    from .solve.decompose import DecompositionRequest, DecompositionResult
+    from .solve.embedding import DecompositionModel
+    from .solve.encoding import Encoding
 
 
 def _world_ambiguity(relative: str, config_path: Path, read: Path) -> str:
@@ -223,7 +229,7 @@ class Mission:
                                      self.config, self.initial_state, progress).run()
 
     @_deep
-    def encoding(self, explain: bool = False):
+    def encoding(self, explain: bool = False) -> Encoding:
         """The boolean model of the valid mission decompositions (see ``solve/encoding.py``)."""
         from .solve.encoding import Encoder
 
@@ -231,14 +237,24 @@ class Mission:
                        self.initial_state, explain).encode()
 
     @_deep
-    def decomposition_space(self, progress: Callable[[int, int], None] | None = None, keep: bool = True):
+    def decomposition_space(self, progress: Callable[[int, int], None] | None = None,
+                            keep: bool = True) -> DecompositionSpace:
         """The valid mission decompositions as a product of independently solved components."""
         from .solve.cpsat import build_space
 
         return build_space(self.encoding(), keep=keep, progress=progress)
 
-    def decomposition_model(self):
-        """The whole decomposition space as one CP-SAT model, for embedding (see ``api.py``)."""
+    @_deep
+    def decompose(self, request: DecompositionRequest | None = None,
+                  progress: Callable[[int, int], None] | None = None) -> DecompositionResult:
+        """The valid mission decompositions ``request`` asks for (the first 1000 by default):
+        everything ``mutrose-cp decompose`` does, for the API (see ``solve/decompose.py``)."""
+        from .solve.decompose import DecompositionRequest, decompose
+
+        return decompose(self, request if request is not None else DecompositionRequest(), progress)
+
+    def decomposition_model(self) -> DecompositionModel:
+        """The whole decomposition space as one CP-SAT model, for embedding (see ``solve/embedding.py``)."""
         from .solve.embedding import DecompositionModel
 
         return DecompositionModel.build(self)

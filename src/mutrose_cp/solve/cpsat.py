@@ -15,11 +15,11 @@ import math
 import random
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable, Iterator, Mapping, Sequence
+from typing import Callable, Iterator, Sequence
 
 from ortools.sat.python import cp_model
 
-from ..errors import MissionError, NoDecompositionError
+from ..errors import MissionError
 from .boolean_model import (
     FALSE,
     TRUE,
@@ -342,17 +342,6 @@ class DecompositionSpace:
             out.append(self._decompositions([rng.choice(c.solutions) for c in self.components]))  # type: ignore[arg-type]
         return out
 
-    def minimize(self, costs: Mapping[int, int]) -> tuple[list[int], int] | None:
-        """A least-cost decomposition for an additive cost: each component's cheapest solution
-        (ties broken by the canonical order), or None when a component was not listed."""
-        if any(c.solutions is None for c in self.components) or self.count == 0:
-            return None
-        parts = []
-        for c in self.components:
-            parts.append(min(c.solutions, key=lambda s: (sum(costs.get(self.var_to_dec[v], 0) for v in s), sorted(s))))  # type: ignore[union-attr]
-        chosen = self._decompositions(parts)
-        return chosen, sum(costs.get(d, 0) for d in chosen)
-
     def component_table(self, key: Callable[[int], str]) -> list[dict]:
         """Per component: its alternative sets of task decompositions (by output key)."""
         table = []
@@ -430,35 +419,6 @@ def build_space(enc: Encoding, keep: bool = True,
     var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
     # components without decomposition literals only constrain (e.g. all-constant checks)
     return DecompositionSpace(enc, [c for c in comps if c.choice_vars or c.count == 0], var_to_dec)
-
-
-def minimize(enc: Encoding, costs: Mapping[int, int]) -> tuple[list[int], int]:
-    """A decomposition of least total cost (sum over chosen decompositions), by component."""
-    chosen: list[int] = [d for d, lit in enc.decomposition_lit.items() if lit == TRUE]
-    total = sum(costs.get(d, 0) for d in chosen)
-    var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
-    for comp in _components(enc):
-        simple = _simple_choice(comp)
-        if simple is not None:
-            if not simple:
-                raise NoDecompositionError("no valid mission decomposition exists (a task has no valid decomposition)")
-            best = min(simple, key=lambda s: (sum(costs.get(var_to_dec[v], 0) for v in s), sorted(s)))
-            chosen += [var_to_dec[v] for v in best]
-            total += sum(costs.get(var_to_dec[v], 0) for v in best)
-            continue
-        builder = CpBuilder(enc.model)
-        for r in comp.records:
-            builder.post(r)
-        if comp.choice_vars:
-            builder.model.Minimize(sum(costs.get(var_to_dec[v], 0) * builder.var(v) for v in comp.choice_vars))
-        solver, status = run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.INFEASIBLE),
-                                    what="optimising a component")
-        if status == cp_model.INFEASIBLE:
-            raise NoDecompositionError("no valid mission decomposition exists")
-        picked = [var_to_dec[v] for v in comp.choice_vars if solver.BooleanValue(builder.var(v))]
-        chosen += picked
-        total += sum(costs.get(d, 0) for d in picked)
-    return chosen, total
 
 
 def explain(enc: Encoding) -> list[str]:
