@@ -380,7 +380,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--format", choices=("json", "xml"), help="output format (default: the configuration's)")
     p.add_argument("--algorithm", choices=("cpsat", "exploratory"), default="cpsat",
                    help="cpsat (default): solver-backed, factored; exploratory: the original's explicit combination")
-    p.add_argument("--limit", type=_count_option(0), default=1000, metavar="K",
+    p.add_argument("--limit", type=_count_option(0), default=DEFAULT_LIMIT, metavar="K",
                    help="cpsat: list the first K mission decompositions (0 = all; default 1000)")
     p.add_argument("--sample", type=_count_option(1), metavar="K", help="cpsat: list K decompositions drawn uniformly at random")
     p.add_argument("--seed", type=_count_option(0), default=0, help="random seed for --sample (default 0)")

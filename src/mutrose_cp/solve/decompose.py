@@ -14,11 +14,11 @@ from typing import TYPE_CHECKING, Callable, Iterable
 
 from ..errors import NoDecompositionError
 from ..output import SplitListing
-from .cpsat import DecompositionSpace, explain
 from .optimize import CostModel, least_cost
 
 if TYPE_CHECKING:
     from ..mission import Mission
+    from .cpsat import DecompositionSpace
 
 DEFAULT_LIMIT = 1000
 SHOWN_REASONS = 3  # reasons named when nothing is valid, unless every reason is asked for
@@ -119,6 +119,8 @@ def _listing(space: DecompositionSpace, limit: int | None) -> DecompositionResul
 def _nothing_valid(mission: Mission, every_reason: bool) -> NoDecompositionError:
     """The error for a mission without valid decomposition: a conflicting set of labelled
     constraints (CP-SAT assumptions) names what is responsible."""
+    from .cpsat import explain
+
     reasons = explain(mission.encoding(explain=True))
     shown = reasons if every_reason else reasons[:SHOWN_REASONS]
     detail = "; ".join(shown) or "the goal model's structure admits no combination"

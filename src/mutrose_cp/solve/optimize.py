@@ -10,16 +10,15 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from typing import Mapping
-
-from ortools.sat.python import cp_model
+from typing import TYPE_CHECKING, Mapping
 
 from ..errors import MissionError, NoDecompositionError
 from ..htn import TreeNode
 from ..io.text import decode_utf8, read_bytes
 from ..model.task_graph import TaskGraph
-from .cpsat import Component, CpBuilder, DecompositionSpace
-from .run import run_solver
+
+if TYPE_CHECKING:  # OR-Tools is loaded when a component has to be solved
+    from .cpsat import Component, DecompositionSpace
 
 MAX_COST = 10**12  # per action or method: sums over large missions stay far inside 64 bits
 
@@ -90,6 +89,11 @@ def least_cost(space: DecompositionSpace, costs: Mapping[int, int]) -> tuple[lis
 
 def _cheapest(space: DecompositionSpace, component: Component, costs: Mapping[int, int]) -> list[int]:
     """The decomposition vertices of ``component``'s cheapest solution."""
+    from ortools.sat.python import cp_model
+
+    from .cpsat import CpBuilder
+    from .run import run_solver
+
     var_to_dec = space.var_to_dec
     if component.solutions is not None:
         best = min(component.solutions,
