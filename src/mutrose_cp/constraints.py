@@ -186,9 +186,8 @@ def _check_robot_numbers(tg: TaskGraph, constraints: list[Constraint]) -> None:
     for c in constraints:
         if c.kind != EC:
             continue
-        a = tg.vertices[c.first].instance
-        b = tg.vertices[c.second].instance
-        assert a is not None and b is not None
+        a = tg.decomposition(c.first).instance
+        b = tg.decomposition(c.second).instance
         ra, rb = a.robot_number, b.robot_number
         if ra.fixed and rb.fixed:
             ok = ra.min == rb.min

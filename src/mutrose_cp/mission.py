@@ -15,14 +15,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, TypeVar
 
 from .constraints import Constraint, generate_constraints
-from .errors import MissionError
+from .errors import MissionError, Problem
 from .expansion import Expansion, expand
 from .htn import DecompositionPath, all_task_paths
 from .io.config import Configuration, load_configuration
 from .io.goal_model import GoalModel, load_goal_model
 from .io.hddl import Domain, load_domain
 from .io.knowledge import WorldKnowledge, load_knowledge
-from .taskgraph import TaskGraph, build_task_graph
+from .model.task_graph import TaskGraph
+from .taskgraph import build_task_graph
 from .world import InitialState, build_initial_state
 
 if TYPE_CHECKING:  # the solvers import OR-Tools, which takes a while: loaded when first used
@@ -76,7 +77,7 @@ def _pick(candidates: list[Path], chosen: str | None, what: str, option: str, fo
     return candidates[0]
 
 
-def find_mission_files(folder: str | os.PathLike, config_name: str | None = None, *, hddl_name: str | None = None,
+def find_mission_files(folder: str | os.PathLike[str], config_name: str | None = None, *, hddl_name: str | None = None,
                        gm_name: str | None = None) -> tuple[Path, Path, Path]:
     """The HDDL, goal model and configuration of a mission folder (``hddl/ gm/ configuration/``).
 
@@ -151,7 +152,7 @@ class Mission:
     progress: Callable[[str, int, int], None] | None = None
 
     @classmethod
-    def load(cls, hddl: str | os.PathLike, gm: str | os.PathLike, config: str | os.PathLike, *,
+    def load(cls, hddl: str | os.PathLike[str], gm: str | os.PathLike[str], config: str | os.PathLike[str], *,
              lenient_xml: bool = False) -> "Mission":
         """Read and validate the four inputs (the world file is named by the configuration).
 
@@ -159,24 +160,24 @@ class Mission:
         everything that is wrong."""
         from .check import check_annotations, cross_check  # local import: check builds on the loaders
 
-        problems = []
-        loaded = {}
-        def load_config(path: str | os.PathLike) -> Configuration:
-            return load_configuration(path, lenient=lenient_xml)
+        problems: list[Problem] = []
 
-        for key, loader, path in (("domain", load_domain, hddl), ("gm", load_goal_model, gm),
-                                  ("config", load_config, config)):
+        def attempt(load: Callable[[], T]) -> T | None:
             try:
-                loaded[key] = loader(path)
+                return load()
             except MissionError as err:
                 problems.extend(err.problems)
-        if problems:
+                return None
+
+        domain = attempt(lambda: load_domain(hddl))
+        goal_model = attempt(lambda: load_goal_model(gm))
+        cfg = attempt(lambda: load_configuration(config, lenient=lenient_xml))
+        if problems or domain is None or goal_model is None or cfg is None:
             raise MissionError(problems)
-        cfg: Configuration = loaded["config"]
         world_path = resolve_config_path(cfg.world_db.path, Path(config))
         ambiguity = _world_ambiguity(cfg.world_db.path, Path(config), world_path)
         knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id, lenient=lenient_xml)
-        mission = cls(loaded["domain"], loaded["gm"], cfg, knowledge, Path(config), world_path=world_path)
+        mission = cls(domain, goal_model, cfg, knowledge, Path(config), world_path=world_path)
         mission.warnings.extend(cfg.warnings)
         mission.warnings.extend(knowledge.warnings)
         if ambiguity:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum, StrEnum
-from typing import ClassVar, Iterable, Sequence
+from typing import ClassVar, Final, Iterable, Sequence
 
 
 class Const(Enum):
@@ -20,16 +20,15 @@ class Const(Enum):
     FALSE = "FALSE"
 
 
-TRUE, FALSE = Const.TRUE, Const.FALSE
+TRUE: Final = Const.TRUE
+FALSE: Final = Const.FALSE
 Lit = int | Const  # variable id (negative = negation) or a constant
 
 
 def neg(lit: Lit) -> Lit:
-    if lit is TRUE:
-        return FALSE
-    if lit is FALSE:
-        return TRUE
-    return -lit
+    if isinstance(lit, int):
+        return -lit
+    return FALSE if lit is TRUE else TRUE
 
 
 def _ids(lits: Iterable[Lit]) -> list[int]:

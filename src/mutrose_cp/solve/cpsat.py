@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable, Iterator, Sequence
 
-from ortools.sat.python import cp_model
+from ortools.sat.python import cp_model, cp_model_helper
 
 from ..errors import MissionError
 from .boolean_model import (
@@ -37,8 +37,9 @@ from .boolean_model import (
 )
 from .encoding import Encoding
 
-#: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation.
-CpLiteral = cp_model.IntVar | cp_model.NotBooleanVariable
+#: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation
+#: (``IntVar`` and ``NotBooleanVariable`` share this base class).
+CpLiteral = cp_model_helper.Literal
 from .run import run_solver
 
 ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
@@ -48,14 +49,12 @@ ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a compo
 # Posting records to CP-SAT
 
 
-_COMPARISONS: dict[str, Callable[[cp_model.IntVar, int], tuple[cp_model.BoundedLinearExpression, cp_model.BoundedLinearExpression]]] = {
-    "=": lambda x, b: (x == b, x != b),
-    "<>": lambda x, b: (x != b, x == b),
-    ">": lambda x, b: (x > b, x <= b),
-    "<": lambda x, b: (x < b, x >= b),
-    ">=": lambda x, b: (x >= b, x < b),
-    "<=": lambda x, b: (x <= b, x > b),
-}  # op -> (the comparison, its negation)
+def _comparison(op: str, bound: int) -> cp_model.Domain:
+    """The values that satisfy ``value op bound`` (the values that do not: its complement)."""
+    low, high = cp_model.INT_MIN, cp_model.INT_MAX
+    intervals = {"=": [[bound, bound]], "<>": [[low, bound - 1], [bound + 1, high]], ">": [[bound + 1, high]],
+                 "<": [[low, bound - 1]], ">=": [[bound, high]], "<=": [[low, bound]]}[op]
+    return cp_model.Domain.from_intervals(intervals)
 
 
 class CpBuilder:
@@ -70,17 +69,15 @@ class CpBuilder:
         if v not in self.vars:
             iv = self.bm.ints.get(v)
             if iv is not None:
-                self.vars[v] = self.model.NewIntVar(iv.lo, iv.hi, self.bm.names[v])
+                self.vars[v] = self.model.new_int_var(iv.lo, iv.hi, self.bm.names[v])
             else:
-                self.vars[v] = self.model.NewBoolVar(self.bm.names[v])
+                self.vars[v] = self.model.new_bool_var(self.bm.names[v])
         return self.vars[v]
 
     def lit(self, l: Lit) -> CpLiteral:
-        if l is TRUE:
-            return self.model.NewConstant(1)
-        if l is FALSE:
-            return self.model.NewConstant(0)
-        return self.var(l) if l > 0 else self.var(-l).Not()
+        if isinstance(l, Const):
+            return self.model.new_constant(1 if l is TRUE else 0)
+        return self.var(l) if l > 0 else self.var(-l).negated()
 
     def post(self, r: Record, enforce: CpLiteral | None = None) -> cp_model.Constraint | None:
         """Post ``r``; with ``enforce``, the record's defining constraint holds only when
@@ -89,34 +86,34 @@ class CpBuilder:
         c: cp_model.Constraint | None
         match r:
             case Clause(lits=lits):
-                c = m.AddBoolOr([self.lit(l) for l in lits] or [m.NewConstant(0)])
+                c = m.add_bool_or([self.lit(l) for l in lits] or [m.new_constant(0)])
             case Exactly(lits=lits, target=target):
                 choices = [self.lit(l) for l in lits]
                 if target is TRUE:
-                    c = m.AddExactlyOne(choices) if enforce is None else m.Add(sum(choices) == 1)
+                    c = m.add_exactly_one(choices) if enforce is None else m.add(sum(choices) == 1)
                 elif target is FALSE:
-                    c = m.Add(sum(choices) == 0)
+                    c = m.add(sum(choices) == 0)
                 else:
-                    c = m.Add(sum(choices) == self.lit(target))
+                    c = m.add(sum(choices) == self.lit(target))
             case AndOf(lits=lits, target=target):
                 parts, t = [self.lit(l) for l in lits], self.var(target)
-                m.AddBoolAnd(parts).OnlyEnforceIf(t)
-                c = m.AddBoolOr([x.Not() for x in parts] + [t])
+                m.add_bool_and(parts).only_enforce_if(t)
+                c = m.add_bool_or([x.negated() for x in parts] + [t])
             case OrOf(lits=lits, target=target):
                 parts, t = [self.lit(l) for l in lits], self.var(target)
-                m.AddBoolOr(parts).OnlyEnforceIf(t)
+                m.add_bool_or(parts).only_enforce_if(t)
                 for x in parts:
-                    m.AddImplication(x, t)
+                    m.add_implication(x, t)
                 c = None
             case ValueAfter():
                 c = self._value_after(r)
             case Compare(holds=holds, value=value, op=op, bound=bound):
-                sat = self.lit(holds)
-                comparison, negation = _COMPARISONS[op](self.var(value), bound)
-                m.Add(comparison).OnlyEnforceIf(sat)
-                c = m.Add(negation).OnlyEnforceIf(sat.Not())
+                sat, satisfying = self.lit(holds), _comparison(op, bound)
+                m.add_linear_expression_in_domain(self.var(value), satisfying).only_enforce_if(sat)
+                c = m.add_linear_expression_in_domain(self.var(value), satisfying.complement())
+                c.only_enforce_if(sat.negated())
         if enforce is not None and c is not None:
-            c.OnlyEnforceIf(enforce)
+            c.only_enforce_if(enforce)
         return c
 
     def _value_after(self, r: ValueAfter) -> cp_model.Constraint:
@@ -125,12 +122,12 @@ class CpBuilder:
         before = self.var(r.previous) if r.previous is not None else r.previous_value
         written, known = self.lit(r.writer), self.lit(r.known)
         if r.effect == NumericEffectKind.ASSIGN:
-            m.Add(target == r.amount).OnlyEnforceIf(written)
+            m.add(target == r.amount).only_enforce_if(written)
         else:
             # adding to an unknown value starts from the amount itself
-            m.Add(target == before + r.amount).OnlyEnforceIf([written, known])
-            m.Add(target == r.amount).OnlyEnforceIf([written, known.Not()])
-        return m.Add(target == before).OnlyEnforceIf(written.Not())
+            m.add(target == before + r.amount).only_enforce_if([written, known])
+            m.add(target == r.amount).only_enforce_if([written, known.negated()])
+        return m.add(target == before).only_enforce_if(written.negated())
 
 
 # ---------------------------------------------------------------------------------------------
@@ -180,7 +177,7 @@ def _components(enc: Encoding) -> list[Component]:
 
 
 class _Collector(cp_model.CpSolverSolutionCallback):
-    def __init__(self, variables: list, ids: list[int], keep: bool) -> None:
+    def __init__(self, variables: list[cp_model.IntVar], ids: list[int], keep: bool) -> None:
         super().__init__()
         self.variables = variables
         self.ids = ids
@@ -215,9 +212,10 @@ def _simple_choice(comp: Component) -> list[frozenset[int]] | None:
                 return []
             case _:
                 return None
-    if not all(isinstance(l, int) and l > 0 for l in options):
+    choices = [l for l in options if isinstance(l, int) and l > 0]
+    if len(choices) != len(options):
         return None
-    return [frozenset([v]) for v in options if v not in excluded]
+    return [frozenset([v]) for v in choices if v not in excluded]
 
 
 def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
@@ -342,9 +340,9 @@ class DecompositionSpace:
             out.append(self._decompositions([rng.choice(c.solutions) for c in self.components]))  # type: ignore[arg-type]
         return out
 
-    def component_table(self, key: Callable[[int], str]) -> list[dict]:
+    def component_table(self, key: Callable[[int], str]) -> list[dict[str, object]]:
         """Per component: its alternative sets of task decompositions (by output key)."""
-        table = []
+        table: list[dict[str, object]] = []
         for c in self.components:
             alts = [sorted(self.var_to_dec[v] for v in s) for s in c.solutions or []]
             table.append({"count": str(c.count), "alternatives": [[key(d) for d in a] for a in alts]})
@@ -396,7 +394,7 @@ def build_space(enc: Encoding, keep: bool = True,
                 progress: Callable[[int, int], None] | None = None) -> DecompositionSpace:
     comps = _components(enc)
     # components that are identical up to renaming (one per forAll instance) are solved once
-    solved: dict[tuple, tuple[list[int], Component]] = {}
+    solved: dict[tuple[object, ...], tuple[list[int], Component]] = {}
     for i, comp in enumerate(comps):
         if comp.count == 0 and comp.solutions == []:
             pass
@@ -429,16 +427,16 @@ def explain(enc: Encoding) -> list[str]:
         assumptions = {}
         for r in comp.records:
             if r.label:
-                a = builder.model.NewBoolVar(f"assume:{r.label}")
+                a = builder.model.new_bool_var(f"assume:{r.label}")
                 builder.post(r, enforce=a)
                 assumptions[a.Index()] = r.label
             else:
                 builder.post(r)
-        builder.model.AddAssumptions([builder.model.GetBoolVarFromProtoIndex(i) for i in assumptions])
+        builder.model.add_assumptions([builder.model.get_bool_var_from_proto_index(i) for i in assumptions])
         solver, status = run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.FEASIBLE, cp_model.INFEASIBLE),
                                     what="explaining a component")
         if status == cp_model.INFEASIBLE:
-            core = solver.SufficientAssumptionsForInfeasibility()
+            core = solver.sufficient_assumptions_for_infeasibility()
             labels = sorted({assumptions[i] for i in core if i in assumptions})
             reasons.extend(enc.labels.get(l, l) for l in labels)
             if not labels:

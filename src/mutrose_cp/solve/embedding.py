@@ -65,8 +65,8 @@ class _SharedConstBuilder(CpBuilder):
 
     def __init__(self, bm: BoolModel, model: cp_model.CpModel) -> None:
         super().__init__(bm, model)
-        self.true = model.NewConstant(1)
-        self.false = model.NewConstant(0)
+        self.true = model.new_constant(1)
+        self.false = model.new_constant(0)
 
     def lit(self, l: Lit) -> CpLiteral:
         if l is TRUE:
@@ -168,7 +168,7 @@ class DecompositionModel:
 
     def forbid(self, decompositions: list[str]) -> None:
         """Convenience: exclude every solution that chooses all of ``decompositions``."""
-        self.model.AddBoolOr([self.decomposition[d].Not() for d in decompositions])
+        self.model.add_bool_or([self.decomposition[d].Not() for d in decompositions])
 
 
 # ----------------------------------------------------------------------------------------------

@@ -25,6 +25,7 @@ from ..model.task_graph import TaskGraph, TaskVertex
 from ..world import InitialState
 from .boolean_model import FALSE, TRUE, BoolModel, Compare, Exactly, Lit, NumericEffectKind, ValueAfter, neg
 from .semantics import (
+    AtomKey,
     ConstraintIndex,
     EffectScopes,
     Effects,
@@ -76,10 +77,10 @@ class Encoder:
         self.active: dict[int, Lit] = {}
         self.or_lits: dict[tuple[int, int], Lit] = {}
         self.labels: dict[str, str] = {}
-        self._chain_cache: dict = {}
+        self._chain_cache: dict[tuple[AtomKey, tuple[tuple[int, bool], ...]], tuple[Lit, Lit]] = {}
         order = application_order(self.effects)
-        self.bool_writers: dict[tuple, list[tuple[int, bool]]] = {}
-        self.num_writers: dict[tuple, list[tuple[int, str, float]]] = {}
+        self.bool_writers: dict[AtomKey, list[tuple[int, bool]]] = {}
+        self.num_writers: dict[AtomKey, list[tuple[int, str, float]]] = {}
         for d in order:  # writers of each atom, in the order their effects are applied (§7.3)
             for key, val in self.effects[d].facts:
                 self.bool_writers.setdefault(key, []).append((d, val))
@@ -155,10 +156,10 @@ class Encoder:
                 self._choices(c, active)
 
     # --- world values ------------------------------------------------------------------------------
-    def _bool_value(self, atom: tuple, writers: list[tuple[int, bool]]) -> tuple[Lit, Lit]:
+    def _bool_value(self, atom: AtomKey, writers: list[tuple[int, bool]]) -> tuple[Lit, Lit]:
         """(known, true) literals of ``atom`` after the chosen ``writers`` (in Task Graph order) have been
         applied to the initial state."""
-        key = ("b", atom, tuple(writers))
+        key = (atom, tuple(writers))
         if key in self._chain_cache:
             return self._chain_cache[key]
         init = self.facts.get(atom)
@@ -180,7 +181,7 @@ class Encoder:
         self._chain_cache[key] = (known_lit, true_lit)
         return known_lit, true_lit
 
-    def _bool_holds(self, atom: tuple, positive: bool, writers: list[tuple[int, bool]], name: str) -> Lit:
+    def _bool_holds(self, atom: AtomKey, positive: bool, writers: list[tuple[int, bool]], name: str) -> Lit:
         """Literal: the open-world test ``atom == positive`` holds after ``writers``."""
         if not writers:
             init = self.facts.get(atom)
@@ -188,7 +189,7 @@ class Encoder:
         known, true = self._bool_value(atom, writers)
         return self.m.or_of([neg(known), true if positive else neg(true)], name)
 
-    def _num_holds(self, atom: tuple, op: str, bound: float, writers: list[tuple[int, str, float]], name: str) -> Lit:
+    def _num_holds(self, atom: AtomKey, op: str, bound: float, writers: list[tuple[int, str, float]], name: str) -> Lit:
         """Literal: the open-world comparison ``atom op bound`` holds after ``writers``."""
         init = self.values.get(atom)
         if not writers:
@@ -224,17 +225,17 @@ class Encoder:
         parts = [self._state_test(p, decs, name) for p in test.parts]
         return self.m.and_of(parts, name) if isinstance(test, AllOf) else self.m.or_of(parts, name)
 
-    def _bool_writers(self, atom: tuple, decs: set[int]) -> list[tuple[int, bool]]:
+    def _bool_writers(self, atom: AtomKey, decs: set[int]) -> list[tuple[int, bool]]:
         return [w for w in self.bool_writers.get(atom, ()) if w[0] in decs]
 
-    def _num_writers(self, atom: tuple, decs: set[int]) -> list[tuple[int, str, float]]:
+    def _num_writers(self, atom: AtomKey, decs: set[int]) -> list[tuple[int, str, float]]:
         return [w for w in self.num_writers.get(atom, ()) if w[0] in decs]
 
     # --- rules -------------------------------------------------------------------------------------
     def _task_rules(self, t: int) -> None:
         tg = self.tg
         seen = self.scopes.seen_by_task(t)
-        for i, context in enumerate(tg.vertices[t].contexts):
+        for i, context in enumerate(tg.task(t).contexts):
             ok = self._state_test(context, seen, f"context({tg.vertices[t].content})")
             self.m.clause([neg(self.active[t]), ok], self._label(
                 f"context:{t}:{i}", f"task instance {tg.vertices[t].content}: the creation condition "
@@ -261,8 +262,7 @@ class Encoder:
         """Robot-related preconditions of ``d``: the last chosen partner that writes one must
         agree with it (an unknown robot fact holds)."""
         tg = self.tg
-        dec = tg.vertices[d].decomposition
-        assert dec is not None
+        dec = tg.decomposition(d).decomposition
         partners = robot_partners(tg, self.index, d, self.queue_pos)
         for lit, writers in robot_precondition_writers(self.domain, tg, d, partners):
             later: list[Lit] = []

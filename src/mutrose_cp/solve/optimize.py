@@ -102,7 +102,7 @@ def _cheapest(space: DecompositionSpace, component: Component, costs: Mapping[in
     builder = CpBuilder(space.encoding.model)
     for r in component.records:
         builder.post(r)
-    builder.model.Minimize(sum(costs.get(var_to_dec[v], 0) * builder.var(v) for v in component.choice_vars))
+    builder.model.minimize(sum(costs.get(var_to_dec[v], 0) * builder.var(v) for v in component.choice_vars))
     solver, status = run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.INFEASIBLE),
                                 what="optimising a component")
     if status == cp_model.INFEASIBLE:  # pragma: no cover - a counted component has solutions

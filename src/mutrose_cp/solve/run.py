@@ -33,27 +33,29 @@ def _stop(solver: cp_model.CpSolver, worker: threading.Thread) -> None:
     held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
         while worker.is_alive():
-            solver.StopSearch()
+            solver.stop_search()
             worker.join(0.05)
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
-def run_solver(model: cp_model.CpModel, *, accept: Iterable[int], callback: cp_model.CpSolverSolutionCallback | None = None,
-               enumerate_all: bool = False, what: str = "a component") -> tuple[cp_model.CpSolver, int]:
+def run_solver(model: cp_model.CpModel, *, accept: Iterable[cp_model.CpSolverStatus],
+               callback: cp_model.CpSolverSolutionCallback | None = None,
+               enumerate_all: bool = False, what: str = "a component") -> tuple[cp_model.CpSolver, cp_model.CpSolverStatus]:
     """Solve ``model`` with one worker; returns the solver and a status from ``accept``."""
     solver = cp_model.CpSolver()
     solver.parameters.num_workers = 1
     solver.parameters.catch_sigint_signal = False
     if enumerate_all:
         solver.parameters.enumerate_all_solutions = True
-    result: dict[str, object] = {}
+    statuses: list[cp_model.CpSolverStatus] = []
+    errors: list[BaseException] = []
 
     def work() -> None:
         try:
-            result["status"] = solver.Solve(model, callback) if callback is not None else solver.Solve(model)
+            statuses.append(solver.solve(model, callback) if callback is not None else solver.solve(model))
         except BaseException as exc:  # noqa: BLE001 - handed to the main thread
-            result["error"] = exc
+            errors.append(exc)
 
     worker = threading.Thread(target=work, name="cp-sat", daemon=True)
     try:
@@ -63,10 +65,10 @@ def run_solver(model: cp_model.CpModel, *, accept: Iterable[int], callback: cp_m
     except BaseException:
         _stop(solver, worker)
         raise
-    if "error" in result:
-        raise result["error"]  # type: ignore[misc]
-    status = int(result["status"])  # type: ignore[call-overload]
+    if errors:
+        raise errors[0]
+    status = statuses[0]
     if status not in set(accept):
-        raise IncompleteSolveError(f"CP-SAT did not finish {what} ({solver.StatusName(status)}): no result is "
+        raise IncompleteSolveError(f"CP-SAT did not finish {what} ({solver.status_name(status)}): no result is "
                                    "reported from an unfinished search")
     return solver, status

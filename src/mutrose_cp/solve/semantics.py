@@ -237,8 +237,8 @@ def achieve_tests(tg: TaskGraph, v: int, gm: GoalModel, config: Configuration) -
     The original loses the latter: a means-end achieve goal (one child) is not an operator, so
     trimming drops it with its condition (docs/deviations.md)."""
     out = []
-    vertex = tg.vertices[v]
-    own = achieve_test(vertex, gm, config) if isinstance(vertex, ScopeVertex) else None
+    at = tg.vertices[v]
+    own = achieve_test(at, gm, config) if isinstance(at, ScopeVertex) else None
     if own is not None:
         out.append((tg.scope(v).goal or "", own))
     for vertex in tg.achieve_carried.get(v, ()):
@@ -409,6 +409,4 @@ def robot_precondition_writers(domain: Domain, tg: TaskGraph, d: int,
 
 
 def _decomposition(tg: TaskGraph, d: int) -> Decomposition:
-    dec = tg.vertices[d].decomposition
-    assert dec is not None
-    return dec
+    return tg.decomposition(d).decomposition
