@@ -199,7 +199,7 @@ class _Walker:
             rat = RatNode(MEANSEND, node.id, node.key, [], node.group, node.divisible, node.or_decomposed, snapshot)
             rat.children.append(self.walk(children[0], depth + 1))
             return rat
-        annotation: Annotation = node.annotation if isinstance(node.annotation, AnnotationOp) else AnnotationOp(
+        annotation: AnnotationOp = node.annotation if isinstance(node.annotation, AnnotationOp) else AnnotationOp(
             "#", tuple(AnnotationLeaf(c.id) for c in children)
         )
         if node.or_decomposed and annotation.op in (";", "FALLBACK"):

@@ -13,14 +13,18 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 from .conditions import compare
 from .errors import MissionError
-from .io.hddl import Action, Comparison, Domain, Literal, Method, NumericEffect
+from .io.hddl import AbstractTask, Action, Comparison, Domain, Literal, Method, NumericEffect
 
 PSEUDO_PREFIX = "__method_precondition_"
 MAX_RECURSION = 64  # recursive methods must be guarded by a numeric function
+
+Number = int | float
+_Atom = tuple[str, tuple[str, ...]]
+"""A predicate or function applied to arguments: the key of a fact or of a numeric value."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -59,8 +63,8 @@ class Fragment:
     end: int
     function: str
     args: tuple[str, ...]
-    bound: int | float
-    decrease: int | float
+    bound: Number
+    decrease: Number
 
 
 @dataclass(frozen=True)
@@ -122,8 +126,9 @@ class _TDG:
         self.root = self._new("task", root_task, None)
         self._add_task(self.root)
 
-    def _new(self, kind: str, name: str, parent: int | None, **kw) -> _Vertex:
-        v = _Vertex(len(self.vertices), kind, name, parent, **kw)
+    def _new(self, kind: str, name: str, parent: int | None,
+             method: Method | None = None, action: Action | None = None) -> _Vertex:
+        v = _Vertex(len(self.vertices), kind, name, parent, method, action)
         self.vertices.append(v)
         return v
 
@@ -202,9 +207,9 @@ class _State:
 
     __slots__ = ("facts", "values")
 
-    def __init__(self, facts: dict | None = None, values: dict | None = None) -> None:
-        self.facts: dict[tuple[str, tuple[str, ...]], bool] = facts if facts is not None else {}
-        self.values: dict[tuple[str, tuple[str, ...]], int | float] = values if values is not None else {}
+    def __init__(self, facts: dict[_Atom, bool] | None = None, values: dict[_Atom, Number] | None = None) -> None:
+        self.facts: dict[_Atom, bool] = facts if facts is not None else {}
+        self.values: dict[_Atom, Number] = values if values is not None else {}
 
     def copy(self) -> "_State":
         return _State(dict(self.facts), dict(self.values))
@@ -258,6 +263,43 @@ class _Partial:
         return _Partial(self.steps + other.steps, self.trees + other.trees, self.fragments + shifted)
 
 
+@dataclass
+class _Checked:
+    """What checking a primitive step against the symbolic state found (§2.4).
+
+    ``facts`` and ``values`` are the unknown facts and function values the step needs, to be
+    assumed true of the state; ``guards`` are the ``>`` comparisons among them, with their
+    declared bound, which mark a recursive method's guard."""
+
+    executable: bool = True
+    facts: list[tuple[_Atom, bool]] = field(default_factory=list)
+    values: list[tuple[_Atom, Number]] = field(default_factory=list)
+    equals: list[tuple[_Atom, Number]] = field(default_factory=list)  # the "=" preconditions assumed so far
+    guards: list[tuple[_Atom, Number]] = field(default_factory=list)
+
+
+def _net_change(key: _Atom, steps: Sequence[Step]) -> Number:
+    """The sum of the increases and decreases that ``steps`` make to function ``key``."""
+    return sum(
+        (n.amount if n.kind == "increase" else -n.amount)
+        for s in steps for n in s.numeric_effects
+        if (n.function, n.args) == key and n.kind != "assign"
+    )
+
+
+def _combine(child_lists: list[list[_Partial]]) -> list[_Partial]:
+    """Every concatenation of one path per child, children in method order (§2.4).
+
+    The first child's choice varies fastest, as in the original's enumeration."""
+    combined: list[_Partial] = []
+    for lst in child_lists:
+        if not combined:
+            combined = [_Partial(list(p.steps), list(p.trees), list(p.fragments)) for p in lst]
+            continue
+        combined = [p.then(q) for q in lst for p in combined]
+    return combined or [_Partial([], [])]
+
+
 class _PathGenerator:
     """Path generation with a symbolic world state (§2.4)."""
 
@@ -267,101 +309,96 @@ class _PathGenerator:
         self.root_task = domain.task_by_name[tdg.vertices[tdg.root.id].name]
 
     def task_paths(self, vid: int, state: _State, mapping: dict[str, str], depth: int) -> list[_Partial]:
-        """Abstract vertex: the concatenated paths of its methods, each from a copy of ``state``."""
+        """Abstract vertex: the concatenated paths of its methods, each from a copy of ``state``.
+
+        A task decomposes through any of its methods, so its paths are those of every method
+        in declaration order; ``depth`` counts nested tasks to cut a recursion that never ends."""
         if depth > MAX_RECURSION:
             raise MissionError(
                 f"recursive decomposition of task {self.tdg.vertices[vid].name} does not terminate: "
                 "a recursive method needs a numeric precondition that its actions decrease",
                 where=self.domain.source,
             )
-        v = self.tdg.vertices[vid]
-        task = self.domain.task_by_name[v.name]
+        task = self.domain.task_by_name[self.tdg.vertices[vid].name]
+        task_node_args = _rename([p.name for p in task.parameters], mapping)
         out: list[_Partial] = []
         for mid in (c for c in self.tdg.vertices if c.parent == vid and c.kind == "method"):
             method = mid.method
             assert method is not None
-            m_map = {}
-            for i, arg in enumerate(method.task_args):
-                param = task.parameters[i].name
-                if param not in mapping:
-                    raise MissionError(
-                        f"method {method.name}: argument {arg} of task {task.name} is not bound to a "
-                        f"parameter of {self.root_task.name}; nested abstract subtasks must receive "
-                        "every argument from the enclosing task",
-                        where=f"{self.domain.source}:{method.line}:{method.column}",
-                    )
-                m_map[arg] = mapping[param]
+            m_map = self._method_mapping(task, method, mapping)
+            method_node_args = _rename([p.name for p in method.parameters], m_map)
             for partial in self.method_paths(mid, state.copy(), m_map, depth):
-                out.append(
-                    _Partial(
-                        partial.steps,
-                        [TreeNode("task", task.name, _rename([p.name for p in task.parameters], mapping),
-                                  (TreeNode("method", method.name,
-                                            _rename([p.name for p in method.parameters], m_map),
-                                            tuple(partial.trees)),))],
-                        partial.fragments,
-                    )
-                )
+                method_node = TreeNode("method", method.name, method_node_args, tuple(partial.trees))
+                out.append(_Partial(partial.steps, [TreeNode("task", task.name, task_node_args, (method_node,))],
+                                    partial.fragments))
         return out
 
+    def _method_mapping(self, task: AbstractTask, method: Method, mapping: dict[str, str]) -> dict[str, str]:
+        """The method's task arguments renamed to root parameters through the task's ``mapping``.
+
+        Paths speak only of the root task's parameters, so every argument a nested task
+        receives must come from the enclosing task."""
+        m_map: dict[str, str] = {}
+        for i, arg in enumerate(method.task_args):
+            param = task.parameters[i].name
+            if param not in mapping:
+                raise MissionError(
+                    f"method {method.name}: argument {arg} of task {task.name} is not bound to a "
+                    f"parameter of {self.root_task.name}; nested abstract subtasks must receive "
+                    "every argument from the enclosing task",
+                    where=f"{self.domain.source}:{method.line}:{method.column}",
+                )
+            m_map[arg] = mapping[param]
+        return m_map
+
     def method_paths(self, m: _Vertex, incoming: _State, mu: dict[str, str], depth: int) -> list[_Partial]:
+        """The paths of method vertex ``m``: those of each linearisation of its subtasks, in order."""
+        recursive = any(c[0] == m.parent for c in m.children)  # a cycle with the direct parent task
         results: list[_Partial] = []
         for order in self.tdg.orderings(m):
-            state = incoming.copy()
-            child_lists: list[list[_Partial]] = []
-            failed = False
-            fragments: list[Fragment] = []
-            recursive = any(c[0] == m.parent for c in m.children)  # a cycle with the direct parent task
-            for k, idx in enumerate(order):
-                vid, args, _sid = m.children[idx]
-                child = self.tdg.vertices[vid]
-                if child.kind == "primitive":
-                    action = child.action
-                    assert action is not None
-                    mapping = {p.name: mu[a] for p, a in zip(action.parameters, args) if a in mu}
-                    step = _renamed_step(action, mapping)
-                    later = self._later_steps(m, order[k + 1:], mu)
-                    ok, assumed, guards = self._check(step, state, later)
-                    if not ok:
-                        failed = True
-                        break
-                    for key, val in assumed[0]:
-                        state.facts[key] = val
-                    for key, val in assumed[1]:
-                        state.values[key] = val
-                    if step.pseudo and recursive:
-                        fragments += self._fragments(m, guards, later)
-                    state.apply(step)
-                    child_lists.append(
-                        [_Partial([step], [] if step.pseudo else [TreeNode("action", step.name, step.args)])]
-                    )
-                else:
-                    callee = self.domain.task_by_name[child.name]
-                    nu = {p.name: mu[a] for p, a in zip(callee.parameters, args) if a in mu}
-                    child_lists.append(self.task_paths(vid, state, nu, depth + 1))
-            if failed:
-                continue
-            combined: list[_Partial] = []
-            if any(not lst for lst in child_lists):
-                # an abstract subtask without an executable method makes this ordering
-                # inapplicable; the original drops the subtask and keeps the rest of the method,
-                # a decomposition that skips required work (docs/deviations.md)
-                continue
-            for lst in child_lists:
-                if not combined:
-                    combined = [_Partial(list(p.steps), list(p.trees), list(p.fragments)) for p in lst]
-                    continue
-                combined = [p.then(q) for q in lst for p in combined]
-            if not combined:
-                combined = [_Partial([], [])]
-            for p in combined:
-                p.fragments = fragments + p.fragments
-            results.extend(combined)
+            results.extend(self._ordering_paths(m, order, incoming.copy(), mu, depth, recursive))
         return results
 
-    def _fragments(self, m: _Vertex, guards: list[tuple], later: list[Step]) -> list[Fragment]:
+    def _ordering_paths(self, m: _Vertex, order: list[int], state: _State, mu: dict[str, str], depth: int,
+                        recursive: bool) -> list[_Partial]:
+        """The paths of one linearisation ``order`` of method ``m``, run from ``state``.
+
+        Empty when a primitive step cannot execute; empty too when an abstract subtask has no
+        path, though its later siblings are still generated (so their errors are reported)."""
+        child_lists: list[list[_Partial]] = []
+        fragments: list[Fragment] = []
+        for k, idx in enumerate(order):
+            vid, args, _sid = m.children[idx]
+            child = self.tdg.vertices[vid]
+            if child.kind != "primitive":
+                callee = self.domain.task_by_name[child.name]
+                nu = {p.name: mu[a] for p, a in zip(callee.parameters, args) if a in mu}
+                child_lists.append(self.task_paths(vid, state, nu, depth + 1))
+                continue
+            step = self._step(child, args, mu)
+            later = self._later_steps(m, order[k + 1:], mu)
+            checked = self._check(step, state, later)
+            if not checked.executable:
+                return []
+            state.facts.update(checked.facts)
+            state.values.update(checked.values)
+            if step.pseudo and recursive:
+                fragments += self._fragments(m, checked.guards, later)
+            state.apply(step)
+            child_lists.append([_Partial([step], [] if step.pseudo else [TreeNode("action", step.name, step.args)])])
+        if any(not lst for lst in child_lists):
+            # an abstract subtask without an executable method makes this ordering
+            # inapplicable; the original drops the subtask and keeps the rest of the method,
+            # a decomposition that skips required work (docs/deviations.md)
+            return []
+        combined = _combine(child_lists)
+        for p in combined:
+            p.fragments = fragments + p.fragments
+        return combined
+
+    def _fragments(self, m: _Vertex, guards: list[tuple[_Atom, Number]], later: list[Step]) -> list[Fragment]:
         """Expansion metadata of a recursive method whose ``>`` guard was assumed (hddl.md §7)."""
-        out = []
+        out: list[Fragment] = []
         method = m.method
         assert method is not None
         for key, bound in guards:
@@ -380,59 +417,65 @@ class _PathGenerator:
             out.append(Fragment(0, len(m.children) - 2, key[0], key[1], bound, delta))
         return out
 
-    def _check(self, step: Step, state: _State, later: list[Step]):
+    def _check(self, step: Step, state: _State, later: list[Step]) -> _Checked:
         """Check a primitive step's preconditions against ``state``.
 
-        Returns ``(executable, (facts, values) to assume, assumed ">" guards)``.  Every
-        precondition must hold: the original lets a later numeric comparison that holds
+        Every precondition must hold: the original lets a later numeric comparison that holds
         overwrite an earlier failure, which no reference output depends on (docs/deviations.md);
         the ``not`` of a comparison is ignored, as in the original.  Unknown facts are assumed;
         a ``>`` guard is assumed at ``N - sum of later decrements`` so that a recursive method
         runs once more and then stops."""
-        executable = True
-        facts: list = []
-        values: list = []
-        equals: list = []  # the "=" preconditions assumed so far
-        guards: list = []
+        checked = _Checked()
         for c in step.preconditions:
             if isinstance(c, Literal):
-                key = (c.predicate, c.args)
-                if key in state.facts:
-                    if state.facts[key] != c.positive:
-                        executable = False
-                elif (key, not c.positive) in facts:
-                    executable = False  # the step requires a fact and its negation: never executable
-                else:
-                    facts.append((key, c.positive))
+                _check_literal(c, state, checked)
             else:
-                key = (c.function, c.args)
-                if key in state.values:
-                    executable = executable and compare(state.values[key], c.op, c.value)
-                elif c.op == ">":
-                    delta = sum(
-                        (n.amount if n.kind == "increase" else -n.amount)
-                        for s in later for n in s.numeric_effects
-                        if (n.function, n.args) == key and n.kind != "assign"
-                    )
-                    values.append((key, c.value - delta))
-                    guards.append((key, c.value))
-                else:
-                    if any(k == key and v != c.value for k, v in equals):
-                        executable = False  # the step requires two different values of one function
-                    equals.append((key, c.value))
-                    values.append((key, c.value))
-        return executable, (facts, values), guards
+                _check_comparison(c, state, later, checked)
+        return checked
+
+    def _step(self, vertex: _Vertex, args: tuple[str, ...], mu: dict[str, str]) -> Step:
+        """The primitive ``vertex`` called with ``args``, renamed to root parameters through ``mu``."""
+        action = vertex.action
+        assert action is not None
+        mapping = {p.name: mu[a] for p, a in zip(action.parameters, args) if a in mu}
+        return _renamed_step(action, mapping)
 
     def _later_steps(self, m: _Vertex, positions: list[int], mu: dict[str, str]) -> list[Step]:
         """The renamed primitive steps that follow in the ordering (for ``>`` guards)."""
-        out = []
+        out: list[Step] = []
         for j in positions:
             vid, args, _ = m.children[j]
             v = self.tdg.vertices[vid]
             if v.kind == "primitive" and v.action is not None:
-                mapping = {p.name: mu[a] for p, a in zip(v.action.parameters, args) if a in mu}
-                out.append(_renamed_step(v.action, mapping))
+                out.append(self._step(v, args, mu))
         return out
+
+
+def _check_literal(c: Literal, state: _State, checked: _Checked) -> None:
+    """A boolean precondition holds if the state agrees or does not know (then it is assumed)."""
+    key = (c.predicate, c.args)
+    if key in state.facts:
+        if state.facts[key] != c.positive:
+            checked.executable = False
+    elif (key, not c.positive) in checked.facts:
+        checked.executable = False  # the step requires a fact and its negation: never executable
+    else:
+        checked.facts.append((key, c.positive))
+
+
+def _check_comparison(c: Comparison, state: _State, later: list[Step], checked: _Checked) -> None:
+    """A numeric precondition is compared with a known value, else assumed (see ``_check``)."""
+    key = (c.function, c.args)
+    if key in state.values:
+        checked.executable = checked.executable and compare(state.values[key], c.op, c.value)
+    elif c.op == ">":
+        checked.values.append((key, c.value - _net_change(key, later)))
+        checked.guards.append((key, c.value))
+    else:
+        if any(k == key and v != c.value for k, v in checked.equals):
+            checked.executable = False  # the step requires two different values of one function
+        checked.equals.append((key, c.value))
+        checked.values.append((key, c.value))
 
 
 def task_paths(domain: Domain, task: str) -> list[DecompositionPath]:
@@ -493,82 +536,113 @@ def _groundings(args: tuple[str, ...], binding: Mapping[str, Value]) -> list[tup
     return [tuple(c) for c in itertools.product(*choices)]
 
 
+class _Grounder:
+    """Grounds a path's steps in order, remembering what earlier steps did to each ground atom.
+
+    A precondition of a step on an atom that an earlier step of the same path set is no
+    precondition of the decomposition: the path itself provides it (or makes it impossible).
+    Atoms whose arguments the instance does not bind stay in the root's variable names."""
+
+    def __init__(self, binding: Mapping[str, Value]) -> None:
+        self.binding = binding
+        self.pre: list[Literal | Comparison] = []
+        # net effects in declaration order: a later effect on an atom replaces the earlier one in
+        # its place; ground and non-ground atoms never share a key (only the latter hold "?")
+        self.net_eff: dict[_Atom, bool] = {}
+        self.numeric: dict[_Atom, tuple[str, int]] = {}  # ground function -> (kind, amount) so far
+        self.free_numeric: list[tuple[str, tuple[str, ...], str, int]] = []
+        self.seen_ground: set[_Atom] = set()
+        self.seen_free: set[_Atom] = set()
+        self.shifted: list[Comparison] = []
+        self.unsatisfiable: list[str] = []
+
+    def step(self, step: Step) -> None:
+        """Preconditions first (against the effects of the steps before), then the effects."""
+        for c in step.preconditions:
+            if isinstance(c, Literal):
+                self._literal(c)
+            else:
+                self._comparison(c)
+        for e in step.effects:
+            self._effect(e)
+        for n in step.numeric_effects:
+            self._numeric_effect(n)
+
+    def _literal(self, c: Literal) -> None:
+        grounds = _groundings(c.args, self.binding)
+        if grounds is None:
+            if (c.predicate, c.args) not in self.seen_free:
+                self.pre.append(c)
+            return
+        for g in grounds:
+            if (c.predicate, g) not in self.seen_ground:
+                self.pre.append(Literal(c.predicate, g, c.positive))
+            elif self.net_eff[(c.predicate, g)] != c.positive:
+                # an earlier step of the path (inside an abstract subtask, whose effects
+                # path generation does not pass on) made it false: never executable
+                self.unsatisfiable.append(f"{'' if c.positive else 'not '}{c.predicate}({', '.join(g)})")
+
+    def _comparison(self, c: Comparison) -> None:
+        grounds = _groundings(c.args, self.binding)
+        if grounds is None:
+            self.pre.append(c)
+            return
+        for g in grounds:
+            earlier = self.numeric.get((c.function, g))
+            if earlier is None:
+                self.pre.append(Comparison(c.function, g, c.op, c.value, c.negated))
+            elif earlier[0] != "assign":
+                # only changed by amounts so far: a condition on the starting value (the
+                # original drops it, which accepts the path whatever the world says)
+                self.shifted.append(Comparison(c.function, g, c.op, c.value - earlier[1], c.negated))
+            elif not compare(earlier[1], c.op, c.value):
+                self.unsatisfiable.append(f"{c.function}({', '.join(g)}) {c.op} {c.value}")
+
+    def _effect(self, e: Literal) -> None:
+        grounds = _groundings(e.args, self.binding)
+        if grounds is None:
+            self.net_eff[(e.predicate, e.args)] = e.positive
+            self.seen_free.add((e.predicate, e.args))
+            return
+        for g in grounds:
+            self.net_eff[(e.predicate, g)] = e.positive
+            self.seen_ground.add((e.predicate, g))
+
+    def _numeric_effect(self, n: NumericEffect) -> None:
+        """An assignment fixes the value; increases and decreases add up to a net change."""
+        grounds = _groundings(n.args, self.binding)
+        if grounds is None:
+            self.free_numeric.append((n.function, n.args, n.kind, n.amount))
+            return
+        for g in grounds:
+            key = (n.function, g)
+            if n.kind == "assign":
+                self.numeric[key] = ("assign", n.amount)
+            else:
+                delta = n.amount if n.kind == "increase" else -n.amount
+                kind, old = self.numeric.get(key, ("increase", 0))
+                self.numeric[key] = (kind, old + delta)
+
+    def result(self) -> GroundPredicates:
+        return GroundPredicates(
+            preconditions=tuple(self.pre),
+            effects=tuple(Literal(p, a, v) for (p, a), v in self.net_eff.items()),
+            numeric_effects=tuple((f, a, k, v) for (f, a), (k, v) in self.numeric.items()) + tuple(self.free_numeric),
+            shifted=tuple(self.shifted),
+            unsatisfiable=tuple(self.unsatisfiable),
+        )
+
+
 def ground_path(path: DecompositionPath, binding: Mapping[str, Value]) -> GroundPredicates:
     """Instantiate a path with an instance's parameter values (root parameter -> value)."""
-    pre: list[Literal | Comparison] = []
-    # net effects in declaration order: a later effect on an atom replaces the earlier one in
-    # its place; ground and non-ground atoms never share a key (only the latter hold "?")
-    net_eff: dict[tuple[str, tuple[str, ...]], bool] = {}
-    numeric: dict[tuple[str, tuple[str, ...]], tuple[str, int]] = {}
-    free_numeric: list[tuple[str, tuple[str, ...], str, int]] = []
-    seen_ground: set[tuple[str, tuple[str, ...]]] = set()
-    seen_numeric: set[tuple[str, tuple[str, ...]]] = set()
-    seen_free: set[tuple[str, tuple[str, ...]]] = set()
-    shifted: list[Comparison] = []
-    unsatisfiable: list[str] = []
+    grounder = _Grounder(binding)
     for step in path.steps:
-        for c in step.preconditions:
-            grounds = _groundings(c.args, binding)
-            if isinstance(c, Literal):
-                if grounds is None:
-                    if (c.predicate, c.args) not in seen_free:
-                        pre.append(c)
-                    continue
-                for g in grounds:
-                    if (c.predicate, g) not in seen_ground:
-                        pre.append(Literal(c.predicate, g, c.positive))
-                    elif net_eff[(c.predicate, g)] != c.positive:
-                        # an earlier step of the path (inside an abstract subtask, whose effects
-                        # path generation does not pass on) made it false: never executable
-                        unsatisfiable.append(f"{'' if c.positive else 'not '}{c.predicate}({', '.join(g)})")
-            else:
-                if grounds is None:
-                    pre.append(c)
-                    continue
-                for g in grounds:
-                    if (c.function, g) not in seen_numeric:
-                        pre.append(Comparison(c.function, g, c.op, c.value, c.negated))
-                    elif numeric[(c.function, g)][0] != "assign":
-                        # only changed by amounts so far: a condition on the starting value (the
-                        # original drops it, which accepts the path whatever the world says)
-                        shifted.append(Comparison(c.function, g, c.op, c.value - numeric[(c.function, g)][1],
-                                                  c.negated))
-                    elif not compare(numeric[(c.function, g)][1], c.op, c.value):
-                        unsatisfiable.append(f"{c.function}({', '.join(g)}) {c.op} {c.value}")
-        for e in step.effects:
-            grounds = _groundings(e.args, binding)
-            if grounds is None:
-                net_eff[(e.predicate, e.args)] = e.positive
-                seen_free.add((e.predicate, e.args))
-                continue
-            for g in grounds:
-                net_eff[(e.predicate, g)] = e.positive
-                seen_ground.add((e.predicate, g))
-        for n in step.numeric_effects:
-            grounds = _groundings(n.args, binding)
-            if grounds is None:
-                free_numeric.append((n.function, n.args, n.kind, n.amount))
-                continue
-            for g in grounds:
-                key = (n.function, g)
-                seen_numeric.add(key)
-                if n.kind == "assign":
-                    numeric[key] = ("assign", n.amount)
-                else:
-                    delta = n.amount if n.kind == "increase" else -n.amount
-                    kind, old = numeric.get(key, ("increase", 0))
-                    numeric[key] = (kind, old + delta)
-    effects = [Literal(p, a, v) for (p, a), v in net_eff.items()]
-    return GroundPredicates(
-        preconditions=tuple(pre),
-        effects=tuple(effects),
-        numeric_effects=tuple((f, a, k, v) for (f, a), (k, v) in numeric.items()) + tuple(free_numeric),
-        shifted=tuple(shifted),
-        unsatisfiable=tuple(unsatisfiable),
-    )
+        grounder.step(step)
+    return grounder.result()
 
 
-def expand_path(path: DecompositionPath, binding: Mapping[str, Value], value_of, where: str) -> DecompositionPath:
+def expand_path(path: DecompositionPath, binding: Mapping[str, Value],
+                value_of: Callable[[str, tuple[str, ...]], Number | None], where: str) -> DecompositionPath:
     """Repeat the recursive fragments of ``path`` as often as the world allows (§7.6).
 
     ``value_of(function, args)`` gives the function's value (None if unknown).  For the guard
