@@ -1,0 +1,276 @@
+"""The rules of valid mission decompositions (``solve/semantics.py``), each tested once, directly,
+on small hand-built Task Graphs.
+
+Both decomposers call these functions, so a rule broken here shows up in both; the end-to-end
+tests (differential, oracle, ordering) check the decomposers' use of them."""
+from __future__ import annotations
+
+from mutrose_cp.constraints import Constraint, EC, SEQ
+from mutrose_cp.expansion import TaskInstance
+from mutrose_cp.htn import DecompositionPath, GroundPredicates, TreeNode
+from mutrose_cp.io.goal_model import RobotNumber
+from mutrose_cp.io.hddl import Comparison, Literal, load_domain
+from mutrose_cp.model.task_graph import (
+    Decomposition,
+    DecompositionVertex,
+    EdgeKind,
+    GoalVertex,
+    OperatorVertex,
+    TaskGraph,
+    TaskGraphBuilder,
+    TaskVertex,
+)
+from mutrose_cp.solve.semantics import (
+    ConstraintIndex,
+    EffectScopes,
+    Effects,
+    State,
+    application_order,
+    checks_parallel_conflicts,
+    context_enablers,
+    contradicts_itself,
+    effects_of,
+    ground_preconditions_hold,
+    mission_queue,
+    parallel_conflicts,
+    robot_partners,
+    robot_precondition_writers,
+)
+
+
+class Graph:
+    """A tiny Task Graph under construction: operators, tasks and their decompositions."""
+
+    def __init__(self) -> None:
+        self.b = TaskGraphBuilder()
+
+    def op(self, symbol: str, parent: int = -1, edge: EdgeKind = EdgeKind.AND, goal: str = "G") -> int:
+        v = self.b.add(OperatorVertex(index=self.b.next_index, parent=parent, content=symbol, goal=goal))
+        if parent >= 0:
+            self.b.add_edge(parent, v.index, edge)
+        return v.index
+
+    def goal(self, goal_id: str, parent: int) -> int:
+        v = self.b.add(GoalVertex(index=self.b.next_index, parent=parent, content=goal_id, goal=goal_id))
+        self.b.add_edge(parent, v.index, EdgeKind.AND)
+        return v.index
+
+    def task(self, name: str, parent: int, *decompositions: GroundPredicates, task_name: str = "T",
+             params: tuple[tuple[str, str], ...] = (), edge: EdgeKind = EdgeKind.AND) -> list[int]:
+        """A task with one decomposition per ``GroundPredicates``; returns their vertices."""
+        inst = TaskInstance(name, name.split("_")[0], task_name, RobotNumber(1, 1, True), None, (), ())
+        t = self.b.add(TaskVertex(index=self.b.next_index, parent=parent, content=name, instance=inst))
+        self.b.add_edge(parent, t.index, edge)
+        out = []
+        for n, predicates in enumerate(decompositions, start=1):
+            path = DecompositionPath((), TreeNode("task", task_name, ()))
+            dec = Decomposition(f"{name}|{n}", inst, n, path, predicates)
+            d = self.b.add(DecompositionVertex(index=self.b.next_index, parent=t.index, content=dec.id,
+                                               decomposition=dec))
+            self.b.add_edge(t.index, d.index, EdgeKind.AND)
+            out.append(d.index)
+        return out
+
+    def freeze(self) -> TaskGraph:
+        return self.b.freeze()
+
+
+def sets(*facts: tuple[str, bool], numeric: tuple[tuple[str, str, int], ...] = ()) -> GroundPredicates:
+    """A decomposition that sets ``p(x)`` facts and numeric ``f(x)`` values."""
+    return GroundPredicates(preconditions=(), effects=tuple(Literal(p, ("x",), v) for p, v in facts),
+                            numeric_effects=tuple((f, ("x",), kind, amount) for f, kind, amount in numeric))
+
+
+def needs(*facts: tuple[str, bool], compare: tuple[Comparison, ...] = ()) -> GroundPredicates:
+    """A decomposition whose preconditions are ``p(x)`` facts and numeric comparisons."""
+    return GroundPredicates(preconditions=tuple(Literal(p, ("x",), v) for p, v in facts) + compare,
+                            effects=(), numeric_effects=())
+
+
+# --- the mission queue and the order of effects (§7.2, §7.3) ---------------------------------------
+
+
+def test_mission_queue_holds_operators_and_tasks_in_vertex_order():
+    g = Graph()
+    root = g.op(";")
+    means_end = g.goal("G2", root)
+    (d1,) = g.task("AT1_1", means_end, sets())
+    par = g.op("#", root)
+    g.task("AT2_1", par, sets())
+    tg = g.freeze()
+    assert mission_queue(tg) == [root, 2, par, 5]  # no goal node, no decomposition
+    assert d1 not in mission_queue(tg)
+
+
+def test_effects_apply_in_vertex_order_not_in_id_order():
+    assert application_order({12, 3, 7}) == [3, 7, 12]
+    state = State({}, {})
+    for eff in (Effects(((("p", ("x",)), True),), (), ()), Effects(((("p", ("x",)), False),), (), ())):
+        state.apply(eff)
+    assert state.fact("p", ("x",)) is False  # the later writer wins
+
+
+def test_numeric_effects_assign_or_add():
+    state = State({}, {("f", ("x",)): 5.0})
+    state.apply(Effects((), ((("f", ("x",)), "increase", 2.0),), ()))
+    assert state.value("f", ("x",)) == 7.0
+    state.apply(Effects((), ((("f", ("x",)), "assign", 1.0),), ()))
+    assert state.value("f", ("x",)) == 1.0
+    state.apply(Effects((), ((("g", ("x",)), "increase", 3.0),), ()))
+    assert state.value("g", ("x",)) == 3.0  # an unknown value starts from the amount
+
+
+def test_effects_of_splits_ground_and_free_effects():
+    predicates = GroundPredicates(preconditions=(), effects=(Literal("p", ("x",), True), Literal("q", ("?r",), False)),
+                                  numeric_effects=(("f", ("x",), "increase", 2), ("g", ("?r",), "assign", 1)))
+    g = Graph()
+    (d,) = g.task("AT1_1", g.op(";"), predicates)
+    eff = effects_of(g.freeze().decomposition(d).decomposition)
+    assert eff.facts == ((("p", ("x",)), True),)
+    assert eff.numeric == ((("f", ("x",)), "increase", 2),)
+    assert eff.free == (Literal("q", ("?r",), False),)
+
+
+def test_a_task_sees_what_every_enclosing_sequence_puts_before_it():
+    """[AT1 ; (AT2 # (AT3 ; AT4))]: AT2 sees AT1; AT4 sees AT1 and AT3, not its parallel cousin AT2."""
+    g = Graph()
+    root = g.op(";")
+    (a1,) = g.task("AT1_1", root, sets())
+    par = g.op("#", root)
+    (a2,) = g.task("AT2_1", par, sets())
+    inner = g.op(";", par)
+    (a3,) = g.task("AT3_1", inner, sets())
+    a4 = g.task("AT4_1", inner, sets(), sets())
+    tg = g.freeze()
+    scopes = EffectScopes(tg)
+    task = {d: tg.vertices[d].parent for d in (a1, a2, a3, a4[0])}
+    assert scopes.preceding(task[a1]) == set()
+    assert scopes.preceding(task[a2]) == {a1}
+    assert scopes.preceding(task[a4[0]]) == {a1, a3}
+    assert scopes.subtree(par) == [a2, a3, *a4]
+    # an achieve condition at the inner sequence sees its subtree and what precedes it
+    assert scopes.seen_by_achieve(inner) == {a1, a3, *a4}
+
+
+def test_a_task_sees_the_decompositions_that_enable_its_context():
+    g = Graph()
+    root = g.op("#")
+    (enabler,) = g.task("AT1_1", root, sets(("ready", True)))
+    (d2,) = g.task("AT2_1", root, sets())
+    g.b.add_edge(enabler, tg_task := g.b.vertices[d2].parent, EdgeKind.CD)
+    tg = g.freeze()
+    assert context_enablers(tg) == {tg_task: {enabler}}
+    assert EffectScopes(tg).seen_by_task(tg_task) == {enabler}  # parallel, yet seen through the CD edge
+
+
+# --- preconditions (§7.4) -----------------------------------------------------------------------------
+
+
+def test_preconditions_hold_unless_the_state_contradicts_them():
+    g = Graph()
+    (d,) = g.task("AT1_1", g.op(";"), needs(("clean", True), compare=(Comparison("level", ("x",), ">", 2),)))
+    dec = g.freeze().decomposition(d).decomposition
+    assert ground_preconditions_hold(dec, State({}, {}))  # unknown atoms are satisfied
+    assert ground_preconditions_hold(dec, State({("clean", ("x",)): True}, {("level", ("x",)): 3.0}))
+    assert not ground_preconditions_hold(dec, State({("clean", ("x",)): False}, {}))
+    assert not ground_preconditions_hold(dec, State({}, {("level", ("x",)): 2.0}))
+
+
+def test_a_decomposition_that_contradicts_itself_never_holds():
+    g = Graph()
+    root = g.op(";")
+    (both,) = g.task("AT1_1", root, needs(("clean", True), ("clean", False)))
+    undone = GroundPredicates(preconditions=(), effects=(), numeric_effects=(), unsatisfiable=("clean(x)",))
+    (later,) = g.task("AT2_1", root, undone)
+    (fine,) = g.task("AT3_1", root, needs(("clean", True), ("dry", False)))
+    tg = g.freeze()
+    assert contradicts_itself(tg.decomposition(both).decomposition)
+    assert contradicts_itself(tg.decomposition(later).decomposition)
+    assert not contradicts_itself(tg.decomposition(fine).decomposition)
+    assert not ground_preconditions_hold(tg.decomposition(both).decomposition, State({}, {}))
+
+
+# --- parallel conflicts (§7.3) ------------------------------------------------------------------------
+
+
+def test_parallel_conflicts_are_checked_below_an_and_parallel_operator_only():
+    g = Graph()
+    root = g.op(";")
+    par = g.op("#", root)
+    choice = g.op("#", root)
+    g.task("AT1_1", par, sets())
+    g.task("AT2_1", choice, sets(), edge=EdgeKind.OR)
+    tg = g.freeze()
+    assert checks_parallel_conflicts(tg, par)
+    assert not checks_parallel_conflicts(tg, choice)  # an OR: its children never run together
+    assert not checks_parallel_conflicts(tg, root)
+
+
+def test_parallel_conflicts_name_the_setters_of_each_side():
+    g = Graph()
+    par = g.op("#")
+    on1, off1 = g.task("AT1_1", par, sets(("door", True)), sets(("door", False)))
+    (off2,) = g.task("AT2_1", par, sets(("door", False), ("light", True)))
+    tg = g.freeze()
+    effects = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
+    (conflict,) = parallel_conflicts(par, EffectScopes(tg), effects)
+    assert conflict.atom == ("door", ("x",))
+    assert conflict.setting_true == (on1,)
+    assert conflict.setting_false == (off1, off2)
+
+
+# --- robot-related preconditions (§7.4) -----------------------------------------------------------------
+
+ROBOT_DOMAIN = """(define (domain robots)
+  (:types Arm - robot)
+  (:predicates (holding ?r - Arm))
+  (:capabilities grasp)
+  (:task Pick :parameters (?r - Arm))
+  (:method pick-m :parameters (?r - Arm) :task (Pick ?r) :ordered-subtasks (and (pick ?r)))
+  (:task Drop :parameters (?s - Arm))
+  (:method drop-m :parameters (?s - Arm) :task (Drop ?s) :ordered-subtasks (and (drop ?s)))
+  (:action pick :parameters (?r - Arm) :required-capabilities (grasp)
+     :precondition (and (not (holding ?r))) :effect (and (holding ?r)))
+  (:action drop :parameters (?s - Arm) :required-capabilities (grasp)
+     :precondition (and (holding ?s)) :effect (and (not (holding ?s))))
+)
+"""
+
+
+def test_robot_partners_are_earlier_execution_partners_not_sequenced_after(tmp_path):
+    """The EC partners of a decomposition that can have changed a shared robot before it: of a
+    task earlier in the mission queue, and not put after it by a SEQ constraint."""
+    g = Graph()
+    par = g.op("#")
+    (pick,) = g.task("AT1_1", par, sets())
+    (drop,) = g.task("AT2_1", par, sets())
+    (late,) = g.task("AT3_1", par, sets())
+    tg = g.freeze()
+    ecs = [Constraint(EC, pick, drop), Constraint(EC, drop, late), Constraint(EC, pick, late)]
+    index = ConstraintIndex.of(ecs)
+    position = {v: i for i, v in enumerate(mission_queue(tg))}
+    assert robot_partners(tg, index, pick, position) == []  # nothing earlier
+    assert robot_partners(tg, index, drop, position) == [pick]  # AT3 comes later in the queue
+    assert robot_partners(tg, index, late, position) == [pick, drop]
+    sequenced = ConstraintIndex.of(ecs + [Constraint(SEQ, late, pick)])
+    assert robot_partners(tg, sequenced, late, position) == [drop]  # late must run before pick
+
+
+def test_robot_preconditions_are_written_by_partners_effects_renamed(tmp_path):
+    hddl = tmp_path / "robots.hddl"
+    hddl.write_text(ROBOT_DOMAIN)
+    domain = load_domain(hddl)
+    g = Graph()
+    par = g.op("#")
+    pick_effects = GroundPredicates(preconditions=(Literal("holding", ("?r",), False),),
+                                    effects=(Literal("holding", ("?r",), True),), numeric_effects=())
+    drop_needs = GroundPredicates(preconditions=(Literal("holding", ("?s",), True),),
+                                  effects=(Literal("holding", ("?s",), False),), numeric_effects=())
+    (pick,) = g.task("AT1_1", par, pick_effects, task_name="Pick")
+    (drop,) = g.task("AT2_1", par, drop_needs, task_name="Drop")
+    tg = g.freeze()
+    (written,) = robot_precondition_writers(domain, tg, drop, [pick])
+    precondition, writers = written
+    assert precondition == Literal("holding", ("?s",), True)
+    assert writers == [(pick, True)]  # pick's (holding ?r) renamed onto drop's ?s
+    assert robot_precondition_writers(domain, tg, pick, []) == []
