@@ -10,9 +10,7 @@ from __future__ import annotations
 from typing import Iterable
 
 from .errors import Problem, closest
-from .io.config import Configuration
-from .io.goal_model import GMNode, GoalModel
-from .io.hddl import Domain
+from .model import Configuration, Domain, GMNode, GoalModel
 from .query import select_problems
 
 

@@ -11,10 +11,7 @@ from dataclasses import dataclass
 from typing import Callable, Mapping
 
 from .errors import MissionError
-from .io.config import Configuration
-from .io.expressions import Atom, BoolOp, Condition
-from .io.knowledge import base_type
-from .query import Binding
+from .model import Atom, Binding, BoolOp, Condition, Configuration, base_type
 
 
 

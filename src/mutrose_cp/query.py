@@ -28,40 +28,11 @@ from typing import Callable, Mapping, Sequence
 from lxml import etree
 
 from .errors import MissionError
-from .io.expressions import Atom, BoolOp, Condition, Select
-from .io.knowledge import (
-    WorldKnowledge,
-    base_type,
-    child,
-    element_children,
-    field_text,
-    is_collection_type,
-    parse_number,
-    split_list,
-    text_of,
-)
+from .io.knowledge import parse_number, split_list
+from .model import Atom, Binding, BoolOp, Condition, Select, WorldKnowledge, base_type, is_collection_type
+from .model.records import child, element_children, field_text, text_of
 
 Element = etree._Element
-
-
-@dataclass(frozen=True)
-class Binding:
-    """The current value of a GM variable during decomposition.
-
-    ``value`` is a record id (single-valued variable; ``""`` when a query found nothing) or a
-    tuple of ids (collection); ``type`` the OCL type as declared (``Room``,
-    ``Sequence(Room)``); ``records`` the knowledge records behind the value, in order (needed
-    for ``v.attr`` look-ups and path queries)."""
-
-    value: str | tuple[str, ...]
-    type: str
-    records: tuple[Element, ...] = ()
-
-    @property
-    def ids(self) -> tuple[str, ...]:
-        if isinstance(self.value, tuple):
-            return self.value
-        return (self.value,) if self.value else ()
 
 
 _IN = re.compile(r"\s+in\s+")

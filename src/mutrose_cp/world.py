@@ -9,90 +9,14 @@ literal order is visible: the first matching literal decides a look-up.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import cached_property
 from typing import Iterator
 
 from lxml import etree
 
 from .errors import MissionError, Problem, located
-from .io.config import Configuration, SemanticMapping
-from .io.hddl import Domain
-from .io.knowledge import (
-    WorldKnowledge,
-    child,
-    element_children,
-    number_is_partial,
-    parse_bool,
-    parse_number,
-    text_of,
-)
-
-Number = int | float
-
-
-@dataclass(frozen=True)
-class GroundLiteral:
-    """A ground atom with polarity, e.g. ``clean(RoomA)`` or ``not at(CleanLinens, Storage1)``."""
-
-    predicate: str
-    args: tuple[str, ...]
-    positive: bool = True
-
-    def __str__(self) -> str:
-        atom = f"{self.predicate}({', '.join(self.args)})"
-        return atom if self.positive else f"not {atom}"
-
-
-@dataclass(frozen=True)
-class InitialState:
-    """The ground initial state: objects per sort, literals and function values.
-
-    ``literals`` and ``functions`` keep mapping order and duplicates, as the original's vectors
-    do; look-ups use the first matching entry.  Absent atoms are *unknown* (None), which every
-    consumer treats as satisfied (spec §6).
-    """
-
-    sorts: dict[str, frozenset[str]]
-    literals: tuple[GroundLiteral, ...]
-    functions: tuple[tuple[tuple[str, tuple[str, ...]], Number], ...]
-    warnings: tuple[str, ...] = ()  # world values read differently from how they are written
-
-    @cached_property
-    def _literal_index(self) -> dict[tuple[str, tuple[str, ...]], bool]:
-        index: dict[tuple[str, tuple[str, ...]], bool] = {}
-        for lit in self.literals:
-            index.setdefault((lit.predicate, lit.args), lit.positive)
-        return index
-
-    @cached_property
-    def _function_index(self) -> dict[tuple[str, tuple[str, ...]], Number]:
-        index: dict[tuple[str, tuple[str, ...]], Number] = {}
-        for key, value in self.functions:
-            index.setdefault(key, value)
-        return index
-
-    def fact_map(self) -> dict[tuple[str, tuple[str, ...]], bool]:
-        """Every known atom and its polarity (the first literal of an atom decides), a copy to
-        change as effects are applied."""
-        return dict(self._literal_index)
-
-    def value_map(self) -> dict[tuple[str, tuple[str, ...]], Number]:
-        """Every known function value (the first entry decides), a copy to change."""
-        return dict(self._function_index)
-
-    def value_of(self, pred: str, args: tuple[str, ...] | list[str]) -> bool | None:
-        """Polarity of the first literal ``pred(args)``; None when the atom is unknown."""
-        return self._literal_index.get((pred, tuple(args)))
-
-    def function_value(self, fn: str, args: tuple[str, ...] | list[str]) -> Number | None:
-        """Value of the first ``fn(args)`` entry; None when unknown."""
-        return self._function_index.get((fn, tuple(args)))
-
-    def objects_of(self, sort: str) -> frozenset[str]:
-        """Objects of ``sort`` (empty for an unknown sort)."""
-        return self.sorts.get(sort, frozenset())
-
+from .io.knowledge import number_is_partial, parse_bool, parse_number
+from .model import Configuration, Domain, GroundLiteral, InitialState, Number, SemanticMapping, WorldKnowledge
+from .model.records import child, element_children, text_of
 
 # ---------------------------------------------------------------------------------------------
 # Traversal

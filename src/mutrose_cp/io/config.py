@@ -1,95 +1,28 @@
 """Configuration reader, JSON or XML (spec ``config-and-knowledge.md`` §1–§4).
 
-Every key the original reads is kept; problems are located by key path
+Both formats give the frozen :class:`~mutrose_cp.model.Configuration`.  Every key the original
+reads is kept; problems are located by key path
 (``configuration.json: semantic_mapping[2].map.pred``).
 """
 from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
-from functools import cached_property
 from typing import Any
 
 from lxml import etree
 
 from ..errors import MissionError, Problem, closest, located
-from .knowledge import (
-    element_children,
-    hinted,
-    json_depth_problem,
-    json_syntax_problem,
-    parse_tolerant_xml,
-    text_of,
+from ..model.configuration import (
+    Configuration,
+    OutputConfig,
+    SemanticMapping,
+    VarMapping,
+    WorldDbConfig,
 )
-from .text import decode_utf8, read_bytes
-
-
-@dataclass(frozen=True)
-class WorldDbConfig:
-    type: str
-    file_type: str
-    path: str
-    xml_root: str | None
-    unique_id: str = "name"
-
-
-@dataclass(frozen=True)
-class OutputConfig:
-    output_type: str
-    file_type: str  # "json" | "xml" (lower-cased)
-    file_path: str
-
-
-@dataclass(frozen=True)
-class VarMapping:
-    task_id: str
-    pairs: tuple[tuple[str, str], ...]  # (gm_var, hddl_var)
-    where: str = ""
-
-
-@dataclass(frozen=True)
-class SemanticMapping:
-    type: str  # "attribute" | "ownership" | "relationship" (lower-cased)
-    mapped_type: str  # "predicate" | "function" (lower-cased)
-    pred: str
-    arg_sorts: tuple[str, ...]
-    belongs_to: str = ""
-    name: str = ""  # attribute
-    relates_to: str = ""  # attribute
-    owner: str = ""  # ownership
-    owned: str = ""  # ownership
-    main_entity: str = ""  # relationship
-    related_entity: str = ""  # relationship
-    relationship_type: str = ""
-    attribute_name: str = ""
-    predicate_type: str | None = None
-    where: str = ""  # key path, for messages
-
-
-@dataclass(frozen=True)
-class Configuration:
-    source: str
-    world_db: WorldDbConfig
-    output: OutputConfig
-    location_types: tuple[str, ...]
-    agent_types: tuple[str, ...]
-    type_mapping_entries: tuple[tuple[str, str], ...]  # (hddl_type, ocl_type) in file order
-    var_mapping: tuple[VarMapping, ...]
-    semantic_mapping: tuple[SemanticMapping, ...]
-    warnings: tuple[str, ...] = ()  # located, non-fatal remarks (e.g. missing xml_root)
-
-    def locate(self, key_path: str) -> str:
-        """``Problem.where`` for a key path such as ``SemanticMapping.where``
-        (``configuration.json: semantic_mapping[2]``); the paths stored in the model carry no
-        file name so that the JSON and XML forms of one configuration compare equal."""
-        return f"{self.source}: {key_path}" if key_path else self.source
-
-    @cached_property
-    def type_mapping(self) -> dict[str, str]:
-        """OCL type -> HDDL type (a later entry with the same OCL type wins)."""
-        return {ocl: hddl for hddl, ocl in self.type_mapping_entries}
-
+from ..model.records import element_children, text_of
+from .text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
+from .tolerant_xml import parse_tolerant_xml, source_line
 
 # ---------------------------------------------------------------------------------------------
 # Reading
@@ -134,7 +67,7 @@ def parse_configuration_xml(data: bytes | str, source: str, *, lenient: bool = F
     root = parse_tolerant_xml(data, source, "configuration", lenient=lenient, warnings=builder.warnings)
     if root.tag != "configuration":
         raise MissionError(Problem(
-            located(source, root.sourceline),
+            located(source, source_line(root)),
             f"missing key configuration (the root element is <{root.tag}>)",
         ))
     return builder.build(_xml_to_plain(root, builder))
@@ -238,7 +171,7 @@ class _Builder:
     # -- reporting ----------------------------------------------------------------------------
 
     def problem(self, path: str, message: str, hint: str = "") -> None:
-        self.problems.append(hinted(f"{self.source}: {path}", message, hint))
+        self.problems.append(Problem(f"{self.source}: {path}", message, hint))
 
     def warn(self, path: str, message: str) -> None:
         self.warnings.append(f"{self.source}: {path}: {message}")

@@ -15,8 +15,7 @@ from typing import Any
 from lxml import etree
 
 from ..errors import MissionError, Problem, located
-from .knowledge import json_syntax_problem
-from .text import decode_utf8, read_bytes
+from .text import decode_utf8, json_syntax_problem, read_bytes
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,5 @@
-"""Expression languages embedded in the goal model (spec ``goal-model.md`` §5, §7–§9).
+"""Parsers of the expression languages embedded in the goal model (spec ``goal-model.md`` §5,
+§7–§9), producing the values of :mod:`mutrose_cp.model.expressions`.
 
 * runtime annotations: ``G1: text [G2;(G3#G4);FALLBACK(G5,G6)]``
 * conditions (achieve/context conditions and select bodies), with the original's quirk that
@@ -11,7 +12,6 @@ Each has a lark grammar in ``grammars/``; syntax errors raise
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
 from typing import Iterable
@@ -20,86 +20,16 @@ from lark import Lark, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from ..errors import MissionError
-
-# ---------------------------------------------------------------------------------------------
-# Runtime annotations
-
-
-@dataclass(frozen=True)
-class AnnotationLeaf:
-    """A goal (``G..``) or task (anything else) reference inside an annotation."""
-
-    name: str
-
-    @property
-    def is_goal(self) -> bool:
-        return self.name.startswith("G")
-
-
-@dataclass(frozen=True)
-class AnnotationOp:
-    """``;`` (sequence), ``#`` (parallel) or ``FALLBACK``; same-kind operands are flattened."""
-
-    op: str
-    children: tuple["Annotation", ...]
-
-
-Annotation = AnnotationLeaf | AnnotationOp
-
-# ---------------------------------------------------------------------------------------------
-# Conditions
-
-
-@dataclass(frozen=True)
-class Atom:
-    """One condition atom, e.g. ``!r.is_clean``, ``r.name = "RoomA"``, ``p.name in r.patients``.
-
-    ``text`` is the atom as written (trimmed).  The structured fields are a best-effort split
-    used by evaluators: ``variable``/``attribute`` from ``v.a`` on the left, ``negated`` for a
-    leading ``!`` or ``not``, ``op`` one of ``= <> > < >= <= in`` (None for a bare ``v.a``),
-    ``value`` the right-hand side text (quotes stripped).
-    """
-
-    text: str
-    variable: str = ""
-    attribute: str = ""
-    negated: bool = False
-    op: str | None = None
-    value: str = ""
-
-
-@dataclass(frozen=True)
-class BoolOp:
-    """``&&`` or ``||`` over two or more operands."""
-
-    op: str
-    children: tuple["Condition", ...]
-
-
-Condition = Atom | BoolOp
-
-
-@dataclass(frozen=True)
-class Select:
-    """``queried->select(var:Type | condition)``; ``condition`` is None when empty."""
-
-    queried: str  # "world_db", "v" or "v.a1.a2"
-    variable: str
-    type: str
-    condition: Condition | None
-    text: str
-
-
-@dataclass(frozen=True)
-class ForAll:
-    """``iterated->forAll(iteration | condition)``; ``condition`` is None when empty."""
-
-    iterated: str
-    iteration: str
-    condition: Condition | None
-    condition_text: str
-    text: str
-
+from ..model.expressions import (
+    Annotation,
+    AnnotationLeaf,
+    AnnotationOp,
+    Atom,
+    BoolOp,
+    Condition,
+    ForAll,
+    Select,
+)
 
 # ---------------------------------------------------------------------------------------------
 # Parsers.  The Lark instances are built once (lazily, on first use) and the parse functions are

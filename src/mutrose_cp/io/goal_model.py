@@ -11,114 +11,19 @@ import math
 import os
 import re
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Any, Callable, TypeVar
 
 from ..errors import MissionError, Problem, closest
+from ..model.goal_model import Context, GMNode, GoalModel, RobotNumber, VarDecl
 from .expressions import (
     FORALL_HINT,
     SELECT_HINT,
-    Annotation,
-    Condition,
-    ForAll,
-    Select,
     parse_condition,
     parse_forall,
     parse_node_text,
     parse_select,
 )
-from .knowledge import base_type, hinted, json_depth_problem, json_syntax_problem
-from .text import decode_utf8, read_bytes
-
-
-@dataclass(frozen=True)
-class VarDecl:
-    """A ``Controls``/``Monitors`` declaration ``name : Type`` (type may be empty)."""
-
-    name: str
-    type: str = ""
-
-    @property
-    def is_collection(self) -> bool:
-        return "SEQUENCE" in self.type.upper()
-
-    @property
-    def base_type(self) -> str:
-        return base_type(self.type)
-
-
-@dataclass(frozen=True)
-class Context:
-    """A ``CreationCondition``: ``kind`` is ``trigger`` or ``condition``."""
-
-    kind: str
-    text: str  # the quoted text (event string, or condition source)
-    condition: Condition | None = None  # parsed for condition contexts
-
-
-@dataclass(frozen=True)
-class RobotNumber:
-    """``RobotNumber``: fixed ``n`` (``min == max``, ``fixed``) or a range ``[a,b]``."""
-
-    min: int
-    max: int
-    fixed: bool
-
-
-@dataclass(frozen=True)
-class GMNode:
-    uid: str  # piStar node id
-    id: str  # "G3", "AT1"
-    kind: str  # "goal" | "task"
-    text: str
-    x: float
-    y: float
-    goal_type: str = "Perform"  # "Perform" | "Achieve" | "Query" | (odd value kept, warned)
-    controls: tuple[VarDecl, ...] = ()
-    monitors: tuple[VarDecl, ...] = ()
-    context: Context | None = None
-    forall: ForAll | None = None  # universal achieve condition
-    achieve_condition: Condition | None = None  # plain (non-forAll) achieve condition
-    achieve_text: str = ""  # raw AchieveCondition ("" when absent)
-    query: Select | None = None
-    group: bool = True
-    divisible: bool = True
-    location: str | None = None
-    params: tuple[str, ...] = ()
-    robot_number: RobotNumber | None = None
-    annotation: Annotation | None = None  # None: no annotation / empty brackets
-    task_name: str | None = None  # HDDL abstract task name (tasks only)
-    children: tuple[str, ...] = ()  # keys, left to right
-    parent: str | None = None
-    or_decomposed: bool = False  # some child link is an OR refinement
-    # unique key: the id, or ``id#k`` for the k-th node reusing an id (ids are not checked for
-    # uniqueness by the original; the structure must still tell such nodes apart)
-    key: str = ""
-
-    def __post_init__(self) -> None:
-        if not self.key:
-            object.__setattr__(self, "key", self.id)
-
-
-@dataclass(frozen=True)
-class GoalModel:
-    source: str
-    nodes: tuple[GMNode, ...]  # final vertex order of the original (goal-model.md §3)
-    root: str
-    dfs: tuple[str, ...]  # depth-first order from the root, children left to right
-    warnings: tuple[str, ...] = ()
-
-    @cached_property
-    def by_id(self) -> dict[str, GMNode]:
-        """Nodes by unique key; a plain id names the first node with that id."""
-        out: dict[str, GMNode] = {n.key: n for n in self.nodes}
-        for n in self.nodes:
-            out.setdefault(n.id, n)
-        return out
-
-    def node(self, key: str) -> GMNode:
-        return self.by_id[key]
-
+from .text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
 
 # ---------------------------------------------------------------------------------------------
 # Reader
@@ -328,7 +233,7 @@ class _Reader:
         return f"{self.source}: {what}" if self.source else what
 
     def problem(self, what: str, message: str, hint: str = "") -> None:
-        self.problems.append(hinted(self._where(what), message, hint))
+        self.problems.append(Problem(self._where(what), message, hint))
 
     def warn(self, what: str, message: str) -> None:
         self.warnings.append(str(Problem(self._where(what), message)))

@@ -1,6 +1,7 @@
 """HDDL domain reader (the extended subset of the MutRoSe decomposer, spec ``hddl.md``).
 
-The domain is parsed with a lark grammar (``grammars/hddl.lark``) into frozen model objects.
+The domain is parsed with a lark grammar (``grammars/hddl.lark``) into the frozen
+:class:`~mutrose_cp.model.Domain`.
 Syntax errors and static domain errors (undeclared predicates or subtasks, arity) are raised as
 :class:`~mutrose_cp.errors.MissionError` located at ``file:line:col``.
 """
@@ -8,7 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import lru_cache
 from importlib import resources
 from typing import Iterable
 
@@ -16,151 +17,20 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from ..errors import MissionError, Problem, closest, located
+from ..model.domain import (
+    AbstractTask,
+    Action,
+    Comparison,
+    Declaration,
+    Domain,
+    Literal,
+    Method,
+    NumericEffect,
+    Parameter,
+    Precondition,
+    Subtask,
+)
 from .text import decode_utf8, read_bytes
-
-# ---------------------------------------------------------------------------------------------
-# Model
-
-
-@dataclass(frozen=True)
-class Parameter:
-    """A typed variable ``?name - type`` (name includes the ``?``)."""
-
-    name: str
-    type: str
-
-
-@dataclass(frozen=True)
-class Literal:
-    """A boolean atom ``(pred a1 a2)`` or its negation; arguments are variables or constants."""
-
-    predicate: str
-    args: tuple[str, ...]
-    positive: bool = True
-
-
-@dataclass(frozen=True)
-class Comparison:
-    """A numeric precondition ``(= (f a..) N)`` or ``(> (f a..) N)``.
-
-    ``negated`` records ``(not (= ...))``; the original ignores it when evaluating (kept for
-    fidelity and for the documented deviation)."""
-
-    function: str
-    args: tuple[str, ...]
-    op: str  # "=" or ">"
-    value: int | float
-    negated: bool = False
-
-
-@dataclass(frozen=True)
-class NumericEffect:
-    """``(increase|decrease|assign (f a..) N)`` with an integer amount."""
-
-    kind: str  # "increase" | "decrease" | "assign"
-    function: str
-    args: tuple[str, ...]
-    amount: int
-
-
-Condition = Literal | Comparison
-
-
-@dataclass(frozen=True)
-class Declaration:
-    """A predicate or function declaration ``(name ?a - t1 ?b - t2)``."""
-
-    name: str
-    parameters: tuple[Parameter, ...]
-
-
-@dataclass(frozen=True)
-class AbstractTask:
-    name: str
-    parameters: tuple[Parameter, ...]
-    line: int = 0
-    column: int = 0
-
-
-@dataclass(frozen=True)
-class Action:
-    name: str
-    parameters: tuple[Parameter, ...]
-    capabilities: tuple[str, ...] = ()
-    preconditions: tuple[Condition, ...] = ()  # flattened conjunction, declaration order
-    effects: tuple[Literal, ...] = ()
-    numeric_effects: tuple[NumericEffect, ...] = ()
-    line: int = 0
-    column: int = 0
-
-
-@dataclass(frozen=True)
-class Subtask:
-    """One step of a method's task network; ``id`` is the declared id or ``__t_id_<n>``."""
-
-    id: str
-    task: str
-    args: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class Method:
-    name: str
-    parameters: tuple[Parameter, ...]
-    task: str
-    task_args: tuple[str, ...]
-    preconditions: tuple[Condition, ...] = ()
-    effects: tuple[Literal, ...] = ()
-    numeric_effects: tuple[NumericEffect, ...] = ()
-    subtasks: tuple[Subtask, ...] = ()
-    # (before, after) pairs of subtask ids; for :ordered-subtasks the chain of consecutive ids
-    ordering: tuple[tuple[str, str], ...] = ()
-    ordered: bool = False  # declared with :ordered-subtasks / :ordered-tasks
-    line: int = 0
-    column: int = 0
-
-
-@dataclass(frozen=True)
-class Domain:
-    name: str
-    source: str  # file name used in error locations
-    # type -> parent (None when declared without parent); robot/robotteam are added as the
-    # original does (subtypes of the parent of the first "- object" declaration, else roots)
-    types: tuple[tuple[str, str | None], ...]
-    constants: tuple[tuple[str, str], ...]  # (constant, type)
-    predicates: tuple[Declaration, ...]
-    functions: tuple[Declaration, ...]
-    capabilities: tuple[str, ...]
-    tasks: tuple[AbstractTask, ...]
-    actions: tuple[Action, ...]
-    methods: tuple[Method, ...]  # declaration order
-
-    @cached_property
-    def parent_of(self) -> dict[str, str | None]:
-        return dict(self.types)
-
-    @cached_property
-    def task_by_name(self) -> dict[str, AbstractTask]:
-        return {t.name: t for t in self.tasks}
-
-    @cached_property
-    def action_by_name(self) -> dict[str, Action]:
-        return {a.name: a for a in self.actions}
-
-    def methods_of(self, task: str) -> tuple[Method, ...]:
-        """Methods decomposing ``task`` in declaration order (defines decomposition numbering)."""
-        return tuple(m for m in self.methods if m.task == task)
-
-    @cached_property
-    def robot_sorts(self) -> frozenset[str]:
-        """``robot``, ``robotteam`` and the types declared *directly* below them (the
-        original's "robot-related sorts"; deeper subtypes do not count)."""
-        direct = {t for t, p in self.types if p in ("robot", "robotteam")}
-        return frozenset({"robot", "robotteam"} | direct)
-
-    def predicate_declarations(self, name: str) -> tuple[Declaration, ...]:
-        return tuple(p for p in self.predicates if p.name == name)
-
 
 # ---------------------------------------------------------------------------------------------
 # Reader
@@ -690,13 +560,13 @@ class _DomainReader:
                 "per declared parameter",
             )
 
-    def _preconditions(self, clause: Tree | None, body: _Body) -> tuple[Condition, ...]:
-        conditions: list[Condition] = []
+    def _preconditions(self, clause: Tree | None, body: _Body) -> tuple[Precondition, ...]:
+        conditions: list[Precondition] = []
         if clause is not None:
             self._gd(clause.children[0], body, False, conditions)
         return tuple(conditions)
 
-    def _gd(self, gd: Tree, body: _Body, negated: bool, out: list[Condition]) -> None:
+    def _gd(self, gd: Tree, body: _Body, negated: bool, out: list[Precondition]) -> None:
         kind = gd.data
         if kind == "empty":
             return
