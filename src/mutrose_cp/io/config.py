@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any
+from typing import Any, Callable
 
 from lxml import etree
 
@@ -100,30 +100,34 @@ def _xml_to_plain(root: etree._Element, builder: "_Builder") -> dict[str, Any]:
         elif tag == "type_mapping":
             data[tag] = [_xml_dict(m) for m in element_children(c)]
         elif tag == "var_mapping":
-            entries = []
-            for m in element_children(c):
-                entry: dict[str, Any] = {}
-                task = _last_child(m, "task_id")
-                if task is not None:
-                    entry["task_id"] = text_of(task)
-                entry["map"] = [
-                    {k: v for k, v in mp.attrib.items() if k in ("gm_var", "hddl_var")}
-                    for mp in m.iterchildren(tag="map")
-                ]
-                entries.append(entry)
-            data[tag] = entries
+            data[tag] = [_xml_var_mapping(m) for m in element_children(c)]
         elif tag == "semantic_mapping":
-            entries = []
-            for i, m in enumerate(element_children(c)):
-                entry = _xml_dict(m)
-                mp = _last_child(m, "map")
-                if mp is not None:
-                    entry["map"] = _xml_map(mp, f"semantic_mapping[{i}].map", builder)
-                entries.append(entry)
-            data[tag] = entries
+            data[tag] = [_xml_semantic_mapping(m, i, builder) for i, m in enumerate(element_children(c))]
         else:
             data[tag] = _xml_dict(c)  # unknown keys are ignored by the validator
     return data
+
+
+def _xml_var_mapping(m: etree._Element) -> dict[str, Any]:
+    """``<mapping><task_id>AT1</task_id><map gm_var="r" hddl_var="?r"/>...</mapping>``."""
+    entry: dict[str, Any] = {}
+    task = _last_child(m, "task_id")
+    if task is not None:
+        entry["task_id"] = text_of(task)
+    entry["map"] = [
+        {k: v for k, v in mp.attrib.items() if k in ("gm_var", "hddl_var")}
+        for mp in m.iterchildren(tag="map")
+    ]
+    return entry
+
+
+def _xml_semantic_mapping(m: etree._Element, index: int, builder: "_Builder") -> dict[str, Any]:
+    """A semantic mapping: its fields, and its ``<map>`` read by :func:`_xml_map`."""
+    entry = _xml_dict(m)
+    mp = _last_child(m, "map")
+    if mp is not None:
+        entry["map"] = _xml_map(mp, f"semantic_mapping[{index}].map", builder)
+    return entry
 
 
 def _xml_map(mp: etree._Element, path: str, builder: "_Builder") -> dict[str, Any]:
@@ -357,59 +361,15 @@ class _Builder:
     def one_semantic(self, e: dict[str, Any], path: str) -> SemanticMapping | None:
         """One semantic mapping (spec §4); every required field of its kind is checked."""
         before = len(self.problems)
-
-        def req(key: str) -> str:
-            return self.scalar(e, key, path, f"missing key {key}") or ""
-
         kind_raw = self.scalar(e, "type", path, "missing key type")
         kind = kind_raw.lower() if kind_raw is not None else ""
         mapped_raw = self.scalar(e, "mapped_type", path, "missing key mapped_type")
         mapped = mapped_raw.lower() if mapped_raw is not None else ""
         if mapped_raw is not None and mapped not in MAPPED_TYPES:
             self.warn(f"{path}.mapped_type", f"mapped_type [{mapped_raw}] is neither predicate nor function: mapping ignored")
-        pred = ""
-        arg_sorts: tuple[str, ...] = ()
-        if "map" not in e:
-            self.problem(f"{path}.map", "missing key map")
-        else:
-            mp = self.obj(e["map"], f"{path}.map")
-            if mp is not None:
-                pred = self.scalar(mp, "pred", f"{path}.map", "missing key map.pred") or ""
-                if "arg_sorts" not in mp:
-                    self.problem(f"{path}.map.arg_sorts", "missing key map.arg_sorts")
-                else:
-                    arg_sorts = self.strings(mp["arg_sorts"], f"{path}.map.arg_sorts")
+        pred, arg_sorts = self.semantic_map(e, path)
         predicate_type = self.scalar(e, "predicate_type", path)
-        fields: dict[str, str] = {}
-        if kind_raw is None:
-            pass
-        elif kind == "attribute":
-            fields["name"] = req("name")
-            fields["relates_to"] = req("relates_to")
-            if fields["relates_to"].lower() != "robot":
-                fields["belongs_to"] = req("belongs_to")
-            else:
-                fields["belongs_to"] = self.scalar(e, "belongs_to", path) or ""
-        elif kind in ("ownership", "relationship"):
-            if kind == "ownership":
-                fields["owner"] = req("owner")
-                fields["owned"] = req("owned")
-            else:
-                fields["main_entity"] = req("main_entity")
-                fields["related_entity"] = req("related_entity")
-            fields["relationship_type"] = req("relationship_type")
-            if fields["relationship_type"] == "attribute":
-                fields["attribute_name"] = req("attribute_name")
-            fields["belongs_to"] = req("belongs_to")
-        else:
-            close = closest(kind, SEMANTIC_TYPES, cutoff=0.6)
-            self.problem(
-                f"{path}.type",
-                f"No mapping type [{kind_raw}] for semantic mappings.",
-                (f"Did you mean {close}? " if close else "")
-                + f"Set {path}.type to attribute (a field of a record), ownership (records listed "
-                "inside another record) or relationship (records related to another record).",
-            )
+        fields = self.semantic_fields(e, path, kind_raw) if kind_raw is not None else {}
         if len(self.problems) > before:
             return None
         return SemanticMapping(
@@ -421,3 +381,65 @@ class _Builder:
             where=path,
             **fields,
         )
+
+    def semantic_map(self, e: dict[str, Any], path: str) -> tuple[str, tuple[str, ...]]:
+        """The ``map`` of a semantic mapping: the HDDL predicate or function and its argument
+        sorts ("" and () when missing, with a problem)."""
+        pred = ""
+        arg_sorts: tuple[str, ...] = ()
+        if "map" not in e:
+            self.problem(f"{path}.map", "missing key map")
+            return pred, arg_sorts
+        mp = self.obj(e["map"], f"{path}.map")
+        if mp is not None:
+            pred = self.scalar(mp, "pred", f"{path}.map", "missing key map.pred") or ""
+            if "arg_sorts" not in mp:
+                self.problem(f"{path}.map.arg_sorts", "missing key map.arg_sorts")
+            else:
+                arg_sorts = self.strings(mp["arg_sorts"], f"{path}.map.arg_sorts")
+        return pred, arg_sorts
+
+    def semantic_fields(self, e: dict[str, Any], path: str, kind_raw: str) -> dict[str, str]:
+        """The fields a mapping of type ``kind_raw`` requires (spec §4), as read."""
+        kind = kind_raw.lower()
+
+        def req(key: str) -> str:
+            return self.scalar(e, key, path, f"missing key {key}") or ""
+
+        fields: dict[str, str] = {}
+        if kind == "attribute":
+            fields["name"] = req("name")
+            fields["relates_to"] = req("relates_to")
+            if fields["relates_to"].lower() != "robot":
+                fields["belongs_to"] = req("belongs_to")
+            else:
+                fields["belongs_to"] = self.scalar(e, "belongs_to", path) or ""
+        elif kind in ("ownership", "relationship"):
+            fields.update(self.relation_fields(kind, req))
+        else:
+            close = closest(kind, SEMANTIC_TYPES, cutoff=0.6)
+            self.problem(
+                f"{path}.type",
+                f"No mapping type [{kind_raw}] for semantic mappings.",
+                (f"Did you mean {close}? " if close else "")
+                + f"Set {path}.type to attribute (a field of a record), ownership (records listed "
+                "inside another record) or relationship (records related to another record).",
+            )
+        return fields
+
+    @staticmethod
+    def relation_fields(kind: str, req: Callable[[str], str]) -> dict[str, str]:
+        """Ownership (records listed inside another record) and relationship mappings: the two
+        record types, how they are related, and the owner of the predicate."""
+        fields: dict[str, str] = {}
+        if kind == "ownership":
+            fields["owner"] = req("owner")
+            fields["owned"] = req("owned")
+        else:
+            fields["main_entity"] = req("main_entity")
+            fields["related_entity"] = req("related_entity")
+        fields["relationship_type"] = req("relationship_type")
+        if fields["relationship_type"] == "attribute":
+            fields["attribute_name"] = req("attribute_name")
+        fields["belongs_to"] = req("belongs_to")
+        return fields
