@@ -15,6 +15,7 @@ from lxml import etree
 
 from .errors import MissionError, Problem, located
 from .io.knowledge import number_is_partial, parse_bool, parse_number
+from .io.tolerant_xml import source_line
 from .model import Configuration, Domain, GroundLiteral, InitialState, Number, SemanticMapping, WorldKnowledge
 from .model.records import child, element_children, text_of
 
@@ -105,7 +106,7 @@ def build_sorts(domain: Domain, config: Configuration, knowledge: WorldKnowledge
 def _missing_id(knowledge: WorldKnowledge, el: etree._Element) -> None:
     """The original aborts with ``No such node (name)``; we say which element lacks it."""
     raise MissionError(Problem(
-        located(knowledge.source, el.sourceline),
+        located(knowledge.source, source_line(el)),
         f"element <{el.tag}> is a type-mapped record but has no <{knowledge.unique_id}> child "
         f"(its unique id); do not use a mapped type name as a plain field tag: every <{el.tag}> "
         f"element is read as a {el.tag} record (type_mapping), so give it a <{knowledge.unique_id}> "
@@ -190,7 +191,7 @@ def _attribute(
             text = text_of(value_el)
             value = parse_number(text)
             if number_is_partial(text):
-                warnings.append(f"{located(knowledge_source, value_el.sourceline)}: {m.relates_to} {rid}: {name} "
+                warnings.append(f"{located(knowledge_source, source_line(value_el))}: {m.relates_to} {rid}: {name} "
                                 f"{text.strip()!r} is read as {value}, as the original reads numbers (the longest "
                                 "number at its start, else 0); write a plain number")
             functions.append(((pred, args), value))
