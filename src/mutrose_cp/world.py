@@ -9,7 +9,7 @@ literal order is visible: the first matching literal decides a look-up.
 """
 from __future__ import annotations
 
-from typing import Iterator
+from typing import Iterator, NoReturn
 
 from lxml import etree
 
@@ -80,7 +80,7 @@ def build_sorts(domain: Domain, config: Configuration, knowledge: WorldKnowledge
             rid = knowledge.record_id(rec)
             if rid is None:
                 _missing_id(knowledge, rec)
-            sorts[type_mapping[rec.tag]].add(rid)  # type: ignore[arg-type]
+            sorts[type_mapping[rec.tag]].add(rid)
 
     # 2. every element whose tag is a mapped OCL type, through descendable containers
     mapped_tags = tuple(t for t in type_mapping if t)
@@ -89,7 +89,7 @@ def build_sorts(domain: Domain, config: Configuration, knowledge: WorldKnowledge
             id_el = child(el, uid)
             if id_el is None:
                 _missing_id(knowledge, el)
-            sorts[type_mapping[el.tag]].add(text_of(id_el))  # type: ignore[arg-type]
+            sorts[type_mapping[el.tag]].add(text_of(id_el))
 
     # 3. constants, in their type and every supertype
     parent_of = domain.parent_of
@@ -103,7 +103,7 @@ def build_sorts(domain: Domain, config: Configuration, knowledge: WorldKnowledge
     return {t: frozenset(objs) for t, objs in sorts.items()}
 
 
-def _missing_id(knowledge: WorldKnowledge, el: etree._Element) -> None:
+def _missing_id(knowledge: WorldKnowledge, el: etree._Element) -> NoReturn:
     """The original aborts with ``No such node (name)``; we say which element lacks it."""
     raise MissionError(Problem(
         located(knowledge.source, source_line(el)),
@@ -204,6 +204,9 @@ def _ownership(
     sorts: dict[str, frozenset[str]],
     literals: list[GroundLiteral],
 ) -> None:
+    """``pred(owned, owner)`` for every owned object an owner record lists, and ``not
+    pred(owned, owner)`` for every other object of the owned sort: the one mapping that yields
+    explicit negative facts (the original's closed world per owner)."""
     if m.owner.lower() == "robot" or m.owned.lower() == "robot":
         return
     owner_sort = config.type_mapping.get(m.owner)
@@ -213,23 +216,32 @@ def _ownership(
     owners = sorts.get(owner_sort, frozenset())
     owned_objects = sorted(sorts.get(owned_sort, frozenset()))  # std::set order
     owned_members = frozenset(owned_objects)
-    uid = records.knowledge.unique_id
     for _, owner_id, fields in records.of(m.owner):
         if owner_id not in owners:
             continue
-        listed: list[str] = []
         container = fields.get(m.attribute_name) if m.attribute_name else None
-        if container is not None:
-            for item in container.iterchildren(tag=m.owned) if m.owned else ():
-                item_id = child(item, uid)
-                if item_id is None:
-                    continue
-                oid = text_of(item_id)
-                if oid in owned_members:
-                    listed.append(oid)
+        listed = _listed_objects(m, container, records.knowledge.unique_id, owned_members)
         for oid in listed:
             literals.append(GroundLiteral(m.pred, (oid, owner_id), True))
         listed_set = set(listed)
         for oid in owned_objects:
             if oid not in listed_set:
                 literals.append(GroundLiteral(m.pred, (oid, owner_id), False))
+
+
+def _listed_objects(
+    m: SemanticMapping, container: etree._Element | None, uid: str, owned_members: frozenset[str]
+) -> list[str]:
+    """Ids of the owned records an owner's ``attribute_name`` field lists, in document order,
+    restricted to objects of the owned sort."""
+    listed: list[str] = []
+    if container is None or not m.owned:
+        return listed
+    for item in container.iterchildren(tag=m.owned):
+        item_id = child(item, uid)
+        if item_id is None:
+            continue
+        oid = text_of(item_id)
+        if oid in owned_members:
+            listed.append(oid)
+    return listed
