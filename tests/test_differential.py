@@ -40,7 +40,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, event, given, note, seed, settings, target
 
 from mutrose_cp.errors import NoDecompositionError
-from mutrose_cp.io.hddl import Literal
+from mutrose_cp.model import Literal
 from mutrose_cp.mission import Mission, find_mission_files
 
 from conftest import REFERENCE, require_reference

@@ -28,27 +28,23 @@ from lxml import etree
 
 from mutrose_cp.cli import main
 from mutrose_cp.errors import MissionError
-from mutrose_cp.io.config import (
-    Configuration,
-    load_configuration,
-    parse_configuration_json,
-    parse_configuration_xml,
-)
-from mutrose_cp.io.expressions import (
+from mutrose_cp.io.config import load_configuration, parse_configuration_json, parse_configuration_xml
+from mutrose_cp.io.expressions import parse_condition, parse_forall, parse_node_text, parse_select
+from mutrose_cp.io.goal_model import load_goal_model, parse_goal_model
+from mutrose_cp.io.hddl import load_domain, parse_domain
+from mutrose_cp.io.knowledge import load_knowledge
+from mutrose_cp.model import (
     AnnotationLeaf,
     AnnotationOp,
     Atom,
     BoolOp,
+    Configuration,
+    Domain,
     ForAll,
+    GoalModel,
     Select,
-    parse_condition,
-    parse_forall,
-    parse_node_text,
-    parse_select,
+    WorldKnowledge,
 )
-from mutrose_cp.io.goal_model import GoalModel, load_goal_model, parse_goal_model
-from mutrose_cp.io.hddl import Domain, load_domain, parse_domain
-from mutrose_cp.io.knowledge import WorldKnowledge, load_knowledge
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

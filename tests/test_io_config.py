@@ -7,18 +7,12 @@ import json
 from pathlib import Path
 
 import pytest
-
-from mutrose_cp.errors import MissionError
-from mutrose_cp.io.config import (
-    Configuration,
-    SemanticMapping,
-    load_configuration,
-    parse_configuration_json,
-    parse_configuration_xml,
-)
-
 from conftest import REFERENCE as _REFERENCE
 from conftest import require_reference as reference_dir
+
+from mutrose_cp.errors import MissionError
+from mutrose_cp.io.config import load_configuration, parse_configuration_json, parse_configuration_xml
+from mutrose_cp.model import Configuration, SemanticMapping
 
 
 def _reference_root() -> Path | None:

@@ -7,17 +7,8 @@ from __future__ import annotations
 import pytest
 
 from mutrose_cp.errors import MissionError
-from mutrose_cp.io.expressions import (
-    AnnotationLeaf,
-    AnnotationOp,
-    Atom,
-    BoolOp,
-    make_atom,
-    parse_condition,
-    parse_forall,
-    parse_node_text,
-    parse_select,
-)
+from mutrose_cp.io.expressions import make_atom, parse_condition, parse_forall, parse_node_text, parse_select
+from mutrose_cp.model import AnnotationLeaf, AnnotationOp, Atom, BoolOp
 
 
 def L(name: str) -> AnnotationLeaf:

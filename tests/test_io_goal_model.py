@@ -9,14 +9,16 @@ from typing import Any
 import pytest
 
 from mutrose_cp.errors import MissionError
-from mutrose_cp.io.expressions import AnnotationLeaf, AnnotationOp, Atom, BoolOp
-from mutrose_cp.io.goal_model import (
+from mutrose_cp.io.goal_model import load_goal_model, parse_goal_model
+from mutrose_cp.model import (
+    AnnotationLeaf,
+    AnnotationOp,
+    Atom,
+    BoolOp,
     Context,
     GoalModel,
     RobotNumber,
     VarDecl,
-    load_goal_model,
-    parse_goal_model,
 )
 
 REPO_ROOT = Path(__file__).resolve().parents[1]

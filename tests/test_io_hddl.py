@@ -7,16 +7,8 @@ from pathlib import Path
 import pytest
 
 from mutrose_cp.errors import MissionError
-from mutrose_cp.io.hddl import (
-    Comparison,
-    Domain,
-    Literal,
-    NumericEffect,
-    Parameter,
-    Subtask,
-    load_domain,
-    parse_domain,
-)
+from mutrose_cp.io.hddl import load_domain, parse_domain
+from mutrose_cp.model import Comparison, Domain, Literal, NumericEffect, Parameter, Subtask
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", REPO_ROOT / ".." / "shared" / "reference"))

@@ -5,21 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
-from mutrose_cp.errors import MissionError
-from mutrose_cp.io.knowledge import (
-    WorldKnowledge,
-    base_type,
-    load_knowledge,
-    parse_bool,
-    parse_number,
-    record_id,
-    split_list,
-    text_of,
-)
-
 from conftest import REFERENCE as _REFERENCE
 from conftest import require_reference as reference_dir
+
+from mutrose_cp.errors import MissionError
+from mutrose_cp.io.knowledge import load_knowledge, parse_bool, parse_number, split_list
+from mutrose_cp.model import WorldKnowledge, base_type
+from mutrose_cp.model.records import record_id, text_of
 
 
 def _reference_root() -> Path | None:

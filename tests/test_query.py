@@ -5,14 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
-from mutrose_cp.errors import MissionError
-from mutrose_cp.io.expressions import Atom, BoolOp, Condition, Select
-from mutrose_cp.io.knowledge import WorldKnowledge, load_knowledge
-from mutrose_cp.query import Binding, run_select
-
 from conftest import require_reference as reference_dir
 
+from mutrose_cp.errors import MissionError
+from mutrose_cp.io.knowledge import load_knowledge
+from mutrose_cp.model import Atom, Binding, BoolOp, Condition, Select, WorldKnowledge
+from mutrose_cp.query import run_select
 
 
 def _world(mission: str, name: str = "world_db.xml") -> WorldKnowledge:

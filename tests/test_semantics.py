@@ -8,8 +8,8 @@ from __future__ import annotations
 from mutrose_cp.constraints import Constraint, EC, SEQ
 from mutrose_cp.expansion import TaskInstance
 from mutrose_cp.htn import DecompositionPath, GroundPredicates, TreeNode
-from mutrose_cp.io.goal_model import RobotNumber
-from mutrose_cp.io.hddl import Comparison, Literal, load_domain
+from mutrose_cp.io.hddl import load_domain
+from mutrose_cp.model import Comparison, Literal, RobotNumber
 from mutrose_cp.model.task_graph import (
     Decomposition,
     DecompositionVertex,

@@ -6,15 +6,22 @@ import dataclasses
 from pathlib import Path
 
 import pytest
-
-from mutrose_cp.errors import MissionError
-from mutrose_cp.io.config import Configuration, OutputConfig, SemanticMapping, WorldDbConfig, load_configuration
-from mutrose_cp.io.hddl import Domain, load_domain
-from mutrose_cp.io.knowledge import load_knowledge
-from mutrose_cp.world import GroundLiteral, InitialState, build_initial_state
-
 from conftest import require_reference as reference_dir
 
+from mutrose_cp.errors import MissionError
+from mutrose_cp.io.config import load_configuration
+from mutrose_cp.io.hddl import load_domain
+from mutrose_cp.io.knowledge import load_knowledge
+from mutrose_cp.model import (
+    Configuration,
+    Domain,
+    GroundLiteral,
+    InitialState,
+    OutputConfig,
+    SemanticMapping,
+    WorldDbConfig,
+)
+from mutrose_cp.world import build_initial_state
 
 
 def _mission_state(mission: str, config_name: str = "configuration.json", base: str = "missions") -> InitialState:

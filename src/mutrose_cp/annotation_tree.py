@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Iterator, Mapping
 
-from .query import Binding
+from .model import Binding
 
 OPERATOR = "operator"
 MEANSEND = "meansend"

@@ -10,10 +10,17 @@ from __future__ import annotations
 from typing import Iterable
 
 from .errors import Problem, closest
-from .io.config import Configuration, SemanticMapping, VarMapping
-from .io.expressions import Annotation, AnnotationOp
-from .io.goal_model import GMNode, GoalModel
-from .io.hddl import AbstractTask, Domain
+from .model import (
+    AbstractTask,
+    Annotation,
+    AnnotationOp,
+    Configuration,
+    Domain,
+    GMNode,
+    GoalModel,
+    SemanticMapping,
+    VarMapping,
+)
 from .query import select_problems
 
 

@@ -11,11 +11,7 @@ from dataclasses import dataclass
 from typing import Callable, Mapping
 
 from .errors import MissionError
-from .io.config import Configuration
-from .io.expressions import Atom, BoolOp, Condition
-from .io.knowledge import base_type
-from .query import Binding
-
+from .model import Atom, Binding, BoolOp, Condition, Configuration, base_type
 
 
 @dataclass(frozen=True)
@@ -65,29 +61,35 @@ def translate(
 
 
 def _atom(atom: Atom, bindings: Mapping[str, Binding], config: Configuration, where: str) -> Test:
+    """One atom as ground tests, one per value of its variable: ``v.attr`` (or ``!v.attr``)
+    through an attribute *predicate* mapping, ``v.attr op N`` through an attribute *function*
+    mapping of the variable's type."""
     binding = bindings.get(atom.variable)
     relates = base_type(binding.type) if binding is not None else ""
     values = () if binding is None else (binding.value if isinstance(binding.value, tuple) else (binding.value,))
-    numeric = atom.op in _NUMERIC_OPS
+    op = atom.op
+    numeric = op in _NUMERIC_OPS
     wanted = "function" if numeric else "predicate"
-    if atom.op is not None and not numeric:
-        raise MissionError(f"Invalid condition: {atom.text} (operator {atom.op} is not allowed here)", where)
-    for m in config.semantic_mapping:
-        if m.type == "attribute" and m.mapped_type == wanted and m.name == atom.attribute and m.relates_to == relates:
-            if numeric:
-                try:
-                    bound = float(atom.value)
-                except ValueError:
-                    raise MissionError(
-                        f"Invalid condition: {atom.text} (expected a number after {atom.op})", where
-                    ) from None
-                return AllOf(tuple(ValueTest(m.pred, (v,), atom.op, bound) for v in values))
-            return AllOf(tuple(FactTest(m.pred, (v,), not atom.negated) for v in values))
-    raise MissionError(
-        f"Invalid condition: {atom.text} (no attribute {wanted} mapping named '{atom.attribute}' "
-        f"for the type of '{atom.variable}'{' (' + relates + ')' if relates else ', which is not instantiated'})",
-        where,
+    if op is not None and not numeric:
+        raise MissionError(f"Invalid condition: {atom.text} (operator {op} is not allowed here)", where)
+    mapping = next(
+        (m for m in config.semantic_mapping
+         if m.type == "attribute" and m.mapped_type == wanted and m.name == atom.attribute and m.relates_to == relates),
+        None,
     )
+    if mapping is None:
+        raise MissionError(
+            f"Invalid condition: {atom.text} (no attribute {wanted} mapping named '{atom.attribute}' "
+            f"for the type of '{atom.variable}'{' (' + relates + ')' if relates else ', which is not instantiated'})",
+            where,
+        )
+    if op is None:
+        return AllOf(tuple(FactTest(mapping.pred, (v,), not atom.negated) for v in values))
+    try:
+        bound = float(atom.value)
+    except ValueError:
+        raise MissionError(f"Invalid condition: {atom.text} (expected a number after {op})", where) from None
+    return AllOf(tuple(ValueTest(mapping.pred, (v,), op, bound) for v in values))
 
 
 def compare(value: float, op: str, bound: float) -> bool:

@@ -16,12 +16,20 @@ from typing import Callable, Mapping
 
 from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
 from .errors import MissionError, Problem
-from .io.config import Configuration
-from .io.expressions import Annotation, AnnotationLeaf, AnnotationOp
-from .io.goal_model import GMNode, GoalModel, RobotNumber
-from .io.hddl import Domain
-from .io.knowledge import WorldKnowledge, record_id
-from .query import Binding, run_select
+from .model import (
+    Annotation,
+    AnnotationLeaf,
+    AnnotationOp,
+    Binding,
+    Configuration,
+    Domain,
+    GMNode,
+    GoalModel,
+    RobotNumber,
+    WorldKnowledge,
+)
+from .model.records import record_id
+from .query import run_select
 
 Value = str | tuple[str, ...]
 

@@ -17,7 +17,7 @@ from typing import Callable, Mapping, Sequence
 
 from .conditions import compare
 from .errors import MissionError
-from .io.hddl import AbstractTask, Action, Comparison, Domain, Literal, Method, NumericEffect
+from .model import AbstractTask, Action, Comparison, Domain, Literal, Method, NumericEffect
 
 PSEUDO_PREFIX = "__method_precondition_"
 MAX_RECURSION = 64  # recursive methods must be guarded by a numeric function

@@ -18,13 +18,14 @@ from .constraints import Constraint, generate_constraints
 from .errors import MissionError, Problem
 from .expansion import Expansion, expand
 from .htn import DecompositionPath, all_task_paths
-from .io.config import Configuration, load_configuration
-from .io.goal_model import GoalModel, load_goal_model
-from .io.hddl import Domain, load_domain
-from .io.knowledge import WorldKnowledge, load_knowledge
+from .io.config import load_configuration
+from .io.goal_model import load_goal_model
+from .io.hddl import load_domain
+from .io.knowledge import load_knowledge
+from .model import Configuration, Domain, GoalModel, InitialState, WorldKnowledge
 from .model.task_graph import TaskGraph
 from .taskgraph import build_task_graph
-from .world import InitialState, build_initial_state
+from .world import build_initial_state
 
 if TYPE_CHECKING:  # the solvers import OR-Tools, which takes a while: loaded when first used
     from .solve.cpsat import DecompositionSpace

@@ -14,11 +14,9 @@ from typing import IO, Any, Iterable, Iterator, Mapping
 
 from .constraints import EC, SEQ, Constraint
 from .errors import MissionError
-from .io.config import Configuration
-from .io.hddl import Domain, Literal
+from .model import Configuration, Domain, InitialState, Literal
 from .output_file import atomic_writer
 from .model.task_graph import Decomposition, TaskGraph
-from .world import InitialState
 
 Tree = Any  # str | list[Tree] | dict[str, Tree]
 

@@ -28,40 +28,11 @@ from typing import Callable, Mapping, Sequence
 from lxml import etree
 
 from .errors import MissionError
-from .io.expressions import Atom, BoolOp, Condition, Select
-from .io.knowledge import (
-    WorldKnowledge,
-    base_type,
-    child,
-    element_children,
-    field_text,
-    is_collection_type,
-    parse_number,
-    split_list,
-    text_of,
-)
+from .io.knowledge import parse_number, split_list
+from .model import Atom, Binding, BoolOp, Condition, Select, WorldKnowledge, base_type, is_collection_type
+from .model.records import child, element_children, field_text, text_of
 
 Element = etree._Element
-
-
-@dataclass(frozen=True)
-class Binding:
-    """The current value of a GM variable during decomposition.
-
-    ``value`` is a record id (single-valued variable; ``""`` when a query found nothing) or a
-    tuple of ids (collection); ``type`` the OCL type as declared (``Room``,
-    ``Sequence(Room)``); ``records`` the knowledge records behind the value, in order (needed
-    for ``v.attr`` look-ups and path queries)."""
-
-    value: str | tuple[str, ...]
-    type: str
-    records: tuple[Element, ...] = ()
-
-    @property
-    def ids(self) -> tuple[str, ...]:
-        if isinstance(self.value, tuple):
-            return self.value
-        return (self.value,) if self.value else ()
 
 
 _IN = re.compile(r"\s+in\s+")
@@ -115,15 +86,24 @@ class _Query:
         if queried == "world_db":
             return self.knowledge.records_of(qtype), qtype
         if "." not in queried:
-            binding = self.bindings.get(queried)
-            if binding is None:
-                raise self.invalid(f"variable [{queried}] is not instantiated")
-            if is_collection_type(binding.type) or len(binding.records) > 1:
-                raise self.invalid(f"variable [{queried}] must hold exactly one record to be queried")
-            first = self.first_record(binding)
-            if first is None:
-                return [], None  # the variable holds "" (its query found nothing)
-            return [c for c in element_children(first) if c.tag == qtype], None
+            return self.variable_candidates(queried, qtype), None
+        return self.path_candidates(queried, qtype), None
+
+    def variable_candidates(self, queried: str, qtype: str) -> list[Element]:
+        """``v->select(x:T | ...)``: the ``T`` children of the one record ``v`` holds."""
+        binding = self.bindings.get(queried)
+        if binding is None:
+            raise self.invalid(f"variable [{queried}] is not instantiated")
+        if is_collection_type(binding.type) or len(binding.records) > 1:
+            raise self.invalid(f"variable [{queried}] must hold exactly one record to be queried")
+        first = self.first_record(binding)
+        if first is None:
+            return []  # the variable holds "" (its query found nothing)
+        return [c for c in element_children(first) if c.tag == qtype]
+
+    def path_candidates(self, queried: str, qtype: str) -> list[Element]:
+        """``v.a1.a2->select(x:T | ...)``: the children of field ``a1.a2`` of ``v``'s record in
+        the world knowledge, which must all be ``T`` records."""
         var, *path = queried.split(".")
         binding = self.bindings.get(var)
         first = self.first_record(binding) if binding is not None else None
@@ -141,7 +121,7 @@ class _Query:
         for r in records:
             if r.tag != qtype:
                 raise self.invalid(f"[{queried}] holds a <{r.tag}>, not only {qtype} records")
-        return records, None
+        return records
 
     # -- compilation (all errors are raised here, independently of the candidates) -----------
 
@@ -168,20 +148,22 @@ class _Query:
         return frozenset(split_list(text_of(el)))
 
     def compile_atom(self, atom: Atom) -> _Filter:
+        """One atom as a record test, classified by string search as the original does: an
+        ``in`` before any comparison operator, a bare (possibly negated) boolean field, or a
+        comparison."""
         text = atom.text.strip()
         m_in = _IN.search(text)
         m_op = _OPERATOR.search(text)
         if m_in is not None and (m_op is None or m_in.start() < m_op.start()):
             return self.compile_in(text[: m_in.start()].strip(), text[m_in.end() :].strip())
         if m_op is None:
-            negated = text.startswith("!")
-            attr = _attribute(text[1:] if negated else text)
+            return _boolean(text)
+        return self.compile_comparison(text, m_op)
 
-            def boolean(x: Element) -> bool:
-                c = child(x, attr)
-                return c is not None and (text_of(c).lower() == "true") != negated
-
-            return _Filter(boolean)
+    def compile_comparison(self, text: str, m_op: re.Match[str]) -> _Filter:
+        """``x.attr op rhs`` with the original's quirks: ``<>`` refused, ``>=``/``<=`` read as
+        ``=`` with an empty right side, ``=`` an exact string match, ``>``/``<`` against the
+        first run of digits."""
         op = m_op.group()
         attr = _attribute(text[: m_op.start()].strip().lstrip("!"))
         rhs = text[m_op.end() :]
@@ -192,12 +174,7 @@ class _Query:
         if op in (">=", "<="):
             return _equals(attr, "")  # [bug] parsed as "=" with an empty right side
         if op == "=":
-            value = rhs.strip()
-            if len(value) >= 2 and value[0] == value[-1] and value[0] in "\"'":
-                value = value[1:-1]
-            if not value or not ("a" <= value[0].lower() <= "z"):
-                return _Filter(lambda x: False)  # the right side must start with a letter
-            return _equals(attr, value)
+            return _string_equals(attr, rhs)
         digits = _DIGITS.search(rhs)
         if digits is None:
             raise self.invalid(f"no number after {op} in [{text}]")
@@ -286,6 +263,29 @@ def _attribute(operand: str) -> str:
     is ignored, as in the original)."""
     _, dot, rest = operand.partition(".")
     return rest.strip() if dot else operand.strip()
+
+
+def _boolean(text: str) -> _Filter:
+    """``x.attr`` / ``!x.attr``: the field exists and is (not) ``true``; a missing field
+    matches neither form."""
+    negated = text.startswith("!")
+    attr = _attribute(text[1:] if negated else text)
+
+    def boolean(x: Element) -> bool:
+        c = child(x, attr)
+        return c is not None and (text_of(c).lower() == "true") != negated
+
+    return _Filter(boolean)
+
+
+def _string_equals(attr: str, rhs: str) -> _Filter:
+    """``x.attr = "v"``: quotes stripped; a right side not starting with a letter never matches."""
+    value = rhs.strip()
+    if len(value) >= 2 and value[0] == value[-1] and value[0] in "\"'":
+        value = value[1:-1]
+    if not value or not ("a" <= value[0].lower() <= "z"):
+        return _Filter(lambda x: False)  # the right side must start with a letter
+    return _equals(attr, value)
 
 
 def _equals(attr: str, value: str) -> _Filter:

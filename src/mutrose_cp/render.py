@@ -30,8 +30,8 @@ from .model.task_graph import DecompositionVertex, EdgeKind, GoalVertex, Operato
 
 if TYPE_CHECKING:  # pragma: no cover
     from .expansion import TaskInstance
-    from .io.goal_model import GMNode
     from .mission import Mission
+    from .model import GMNode
 
 __all__ = [
     "RenderError",

@@ -14,8 +14,7 @@ from .conditions import Test, holds, translate
 from .errors import MissionError
 from .expansion import Expansion
 from .htn import DecompositionPath, expand_path, ground_path
-from .io.config import Configuration
-from .io.goal_model import GoalModel
+from .model import Configuration, GoalModel, InitialState
 from .model.task_graph import (
     Decomposition,
     DecompositionVertex,
@@ -28,7 +27,6 @@ from .model.task_graph import (
     TaskGraphBuilder,
     TaskVertex,
 )
-from .world import InitialState
 
 AND, OR, CD, EC = EdgeKind.AND, EdgeKind.OR, EdgeKind.CD, EdgeKind.EC
 

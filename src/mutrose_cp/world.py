@@ -9,90 +9,15 @@ literal order is visible: the first matching literal decides a look-up.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import cached_property
-from typing import Iterator
+from typing import Iterator, NoReturn
 
 from lxml import etree
 
 from .errors import MissionError, Problem, located
-from .io.config import Configuration, SemanticMapping
-from .io.hddl import Domain
-from .io.knowledge import (
-    WorldKnowledge,
-    child,
-    element_children,
-    number_is_partial,
-    parse_bool,
-    parse_number,
-    text_of,
-)
-
-Number = int | float
-
-
-@dataclass(frozen=True)
-class GroundLiteral:
-    """A ground atom with polarity, e.g. ``clean(RoomA)`` or ``not at(CleanLinens, Storage1)``."""
-
-    predicate: str
-    args: tuple[str, ...]
-    positive: bool = True
-
-    def __str__(self) -> str:
-        atom = f"{self.predicate}({', '.join(self.args)})"
-        return atom if self.positive else f"not {atom}"
-
-
-@dataclass(frozen=True)
-class InitialState:
-    """The ground initial state: objects per sort, literals and function values.
-
-    ``literals`` and ``functions`` keep mapping order and duplicates, as the original's vectors
-    do; look-ups use the first matching entry.  Absent atoms are *unknown* (None), which every
-    consumer treats as satisfied (spec §6).
-    """
-
-    sorts: dict[str, frozenset[str]]
-    literals: tuple[GroundLiteral, ...]
-    functions: tuple[tuple[tuple[str, tuple[str, ...]], Number], ...]
-    warnings: tuple[str, ...] = ()  # world values read differently from how they are written
-
-    @cached_property
-    def _literal_index(self) -> dict[tuple[str, tuple[str, ...]], bool]:
-        index: dict[tuple[str, tuple[str, ...]], bool] = {}
-        for lit in self.literals:
-            index.setdefault((lit.predicate, lit.args), lit.positive)
-        return index
-
-    @cached_property
-    def _function_index(self) -> dict[tuple[str, tuple[str, ...]], Number]:
-        index: dict[tuple[str, tuple[str, ...]], Number] = {}
-        for key, value in self.functions:
-            index.setdefault(key, value)
-        return index
-
-    def fact_map(self) -> dict[tuple[str, tuple[str, ...]], bool]:
-        """Every known atom and its polarity (the first literal of an atom decides), a copy to
-        change as effects are applied."""
-        return dict(self._literal_index)
-
-    def value_map(self) -> dict[tuple[str, tuple[str, ...]], Number]:
-        """Every known function value (the first entry decides), a copy to change."""
-        return dict(self._function_index)
-
-    def value_of(self, pred: str, args: tuple[str, ...] | list[str]) -> bool | None:
-        """Polarity of the first literal ``pred(args)``; None when the atom is unknown."""
-        return self._literal_index.get((pred, tuple(args)))
-
-    def function_value(self, fn: str, args: tuple[str, ...] | list[str]) -> Number | None:
-        """Value of the first ``fn(args)`` entry; None when unknown."""
-        return self._function_index.get((fn, tuple(args)))
-
-    def objects_of(self, sort: str) -> frozenset[str]:
-        """Objects of ``sort`` (empty for an unknown sort)."""
-        return self.sorts.get(sort, frozenset())
-
+from .io.knowledge import number_is_partial, parse_bool, parse_number
+from .io.tolerant_xml import source_line
+from .model import Configuration, Domain, GroundLiteral, InitialState, Number, SemanticMapping, WorldKnowledge
+from .model.records import child, element_children, text_of
 
 # ---------------------------------------------------------------------------------------------
 # Traversal
@@ -155,7 +80,7 @@ def build_sorts(domain: Domain, config: Configuration, knowledge: WorldKnowledge
             rid = knowledge.record_id(rec)
             if rid is None:
                 _missing_id(knowledge, rec)
-            sorts[type_mapping[rec.tag]].add(rid)  # type: ignore[arg-type]
+            sorts[type_mapping[rec.tag]].add(rid)
 
     # 2. every element whose tag is a mapped OCL type, through descendable containers
     mapped_tags = tuple(t for t in type_mapping if t)
@@ -164,7 +89,7 @@ def build_sorts(domain: Domain, config: Configuration, knowledge: WorldKnowledge
             id_el = child(el, uid)
             if id_el is None:
                 _missing_id(knowledge, el)
-            sorts[type_mapping[el.tag]].add(text_of(id_el))  # type: ignore[arg-type]
+            sorts[type_mapping[el.tag]].add(text_of(id_el))
 
     # 3. constants, in their type and every supertype
     parent_of = domain.parent_of
@@ -178,10 +103,10 @@ def build_sorts(domain: Domain, config: Configuration, knowledge: WorldKnowledge
     return {t: frozenset(objs) for t, objs in sorts.items()}
 
 
-def _missing_id(knowledge: WorldKnowledge, el: etree._Element) -> None:
+def _missing_id(knowledge: WorldKnowledge, el: etree._Element) -> NoReturn:
     """The original aborts with ``No such node (name)``; we say which element lacks it."""
     raise MissionError(Problem(
-        located(knowledge.source, el.sourceline),
+        located(knowledge.source, source_line(el)),
         f"element <{el.tag}> is a type-mapped record but has no <{knowledge.unique_id}> child "
         f"(its unique id); do not use a mapped type name as a plain field tag: every <{el.tag}> "
         f"element is read as a {el.tag} record (type_mapping), so give it a <{knowledge.unique_id}> "
@@ -266,7 +191,7 @@ def _attribute(
             text = text_of(value_el)
             value = parse_number(text)
             if number_is_partial(text):
-                warnings.append(f"{located(knowledge_source, value_el.sourceline)}: {m.relates_to} {rid}: {name} "
+                warnings.append(f"{located(knowledge_source, source_line(value_el))}: {m.relates_to} {rid}: {name} "
                                 f"{text.strip()!r} is read as {value}, as the original reads numbers (the longest "
                                 "number at its start, else 0); write a plain number")
             functions.append(((pred, args), value))
@@ -279,6 +204,9 @@ def _ownership(
     sorts: dict[str, frozenset[str]],
     literals: list[GroundLiteral],
 ) -> None:
+    """``pred(owned, owner)`` for every owned object an owner record lists, and ``not
+    pred(owned, owner)`` for every other object of the owned sort: the one mapping that yields
+    explicit negative facts (the original's closed world per owner)."""
     if m.owner.lower() == "robot" or m.owned.lower() == "robot":
         return
     owner_sort = config.type_mapping.get(m.owner)
@@ -288,23 +216,32 @@ def _ownership(
     owners = sorts.get(owner_sort, frozenset())
     owned_objects = sorted(sorts.get(owned_sort, frozenset()))  # std::set order
     owned_members = frozenset(owned_objects)
-    uid = records.knowledge.unique_id
     for _, owner_id, fields in records.of(m.owner):
         if owner_id not in owners:
             continue
-        listed: list[str] = []
         container = fields.get(m.attribute_name) if m.attribute_name else None
-        if container is not None:
-            for item in container.iterchildren(tag=m.owned) if m.owned else ():
-                item_id = child(item, uid)
-                if item_id is None:
-                    continue
-                oid = text_of(item_id)
-                if oid in owned_members:
-                    listed.append(oid)
+        listed = _listed_objects(m, container, records.knowledge.unique_id, owned_members)
         for oid in listed:
             literals.append(GroundLiteral(m.pred, (oid, owner_id), True))
         listed_set = set(listed)
         for oid in owned_objects:
             if oid not in listed_set:
                 literals.append(GroundLiteral(m.pred, (oid, owner_id), False))
+
+
+def _listed_objects(
+    m: SemanticMapping, container: etree._Element | None, uid: str, owned_members: frozenset[str]
+) -> list[str]:
+    """Ids of the owned records an owner's ``attribute_name`` field lists, in document order,
+    restricted to objects of the owned sort."""
+    listed: list[str] = []
+    if container is None or not m.owned:
+        return listed
+    for item in container.iterchildren(tag=m.owned):
+        item_id = child(item, uid)
+        if item_id is None:
+            continue
+        oid = text_of(item_id)
+        if oid in owned_members:
+            listed.append(oid)
+    return listed

@@ -1,95 +1,28 @@
 """Configuration reader, JSON or XML (spec ``config-and-knowledge.md`` §1–§4).
 
-Every key the original reads is kept; problems are located by key path
+Both formats give the frozen :class:`~mutrose_cp.model.Configuration`.  Every key the original
+reads is kept; problems are located by key path
 (``configuration.json: semantic_mapping[2].map.pred``).
 """
 from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
-from functools import cached_property
-from typing import Any
+from typing import Any, Callable
 
 from lxml import etree
 
 from ..errors import MissionError, Problem, closest, located
-from .knowledge import (
-    element_children,
-    hinted,
-    json_depth_problem,
-    json_syntax_problem,
-    parse_tolerant_xml,
-    text_of,
+from ..model.configuration import (
+    Configuration,
+    OutputConfig,
+    SemanticMapping,
+    VarMapping,
+    WorldDbConfig,
 )
-from .text import decode_utf8, read_bytes
-
-
-@dataclass(frozen=True)
-class WorldDbConfig:
-    type: str
-    file_type: str
-    path: str
-    xml_root: str | None
-    unique_id: str = "name"
-
-
-@dataclass(frozen=True)
-class OutputConfig:
-    output_type: str
-    file_type: str  # "json" | "xml" (lower-cased)
-    file_path: str
-
-
-@dataclass(frozen=True)
-class VarMapping:
-    task_id: str
-    pairs: tuple[tuple[str, str], ...]  # (gm_var, hddl_var)
-    where: str = ""
-
-
-@dataclass(frozen=True)
-class SemanticMapping:
-    type: str  # "attribute" | "ownership" | "relationship" (lower-cased)
-    mapped_type: str  # "predicate" | "function" (lower-cased)
-    pred: str
-    arg_sorts: tuple[str, ...]
-    belongs_to: str = ""
-    name: str = ""  # attribute
-    relates_to: str = ""  # attribute
-    owner: str = ""  # ownership
-    owned: str = ""  # ownership
-    main_entity: str = ""  # relationship
-    related_entity: str = ""  # relationship
-    relationship_type: str = ""
-    attribute_name: str = ""
-    predicate_type: str | None = None
-    where: str = ""  # key path, for messages
-
-
-@dataclass(frozen=True)
-class Configuration:
-    source: str
-    world_db: WorldDbConfig
-    output: OutputConfig
-    location_types: tuple[str, ...]
-    agent_types: tuple[str, ...]
-    type_mapping_entries: tuple[tuple[str, str], ...]  # (hddl_type, ocl_type) in file order
-    var_mapping: tuple[VarMapping, ...]
-    semantic_mapping: tuple[SemanticMapping, ...]
-    warnings: tuple[str, ...] = ()  # located, non-fatal remarks (e.g. missing xml_root)
-
-    def locate(self, key_path: str) -> str:
-        """``Problem.where`` for a key path such as ``SemanticMapping.where``
-        (``configuration.json: semantic_mapping[2]``); the paths stored in the model carry no
-        file name so that the JSON and XML forms of one configuration compare equal."""
-        return f"{self.source}: {key_path}" if key_path else self.source
-
-    @cached_property
-    def type_mapping(self) -> dict[str, str]:
-        """OCL type -> HDDL type (a later entry with the same OCL type wins)."""
-        return {ocl: hddl for hddl, ocl in self.type_mapping_entries}
-
+from ..model.records import element_children, text_of
+from .text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
+from .tolerant_xml import parse_tolerant_xml, source_line
 
 # ---------------------------------------------------------------------------------------------
 # Reading
@@ -134,7 +67,7 @@ def parse_configuration_xml(data: bytes | str, source: str, *, lenient: bool = F
     root = parse_tolerant_xml(data, source, "configuration", lenient=lenient, warnings=builder.warnings)
     if root.tag != "configuration":
         raise MissionError(Problem(
-            located(source, root.sourceline),
+            located(source, source_line(root)),
             f"missing key configuration (the root element is <{root.tag}>)",
         ))
     return builder.build(_xml_to_plain(root, builder))
@@ -167,30 +100,34 @@ def _xml_to_plain(root: etree._Element, builder: "_Builder") -> dict[str, Any]:
         elif tag == "type_mapping":
             data[tag] = [_xml_dict(m) for m in element_children(c)]
         elif tag == "var_mapping":
-            entries = []
-            for m in element_children(c):
-                entry: dict[str, Any] = {}
-                task = _last_child(m, "task_id")
-                if task is not None:
-                    entry["task_id"] = text_of(task)
-                entry["map"] = [
-                    {k: v for k, v in mp.attrib.items() if k in ("gm_var", "hddl_var")}
-                    for mp in m.iterchildren(tag="map")
-                ]
-                entries.append(entry)
-            data[tag] = entries
+            data[tag] = [_xml_var_mapping(m) for m in element_children(c)]
         elif tag == "semantic_mapping":
-            entries = []
-            for i, m in enumerate(element_children(c)):
-                entry = _xml_dict(m)
-                mp = _last_child(m, "map")
-                if mp is not None:
-                    entry["map"] = _xml_map(mp, f"semantic_mapping[{i}].map", builder)
-                entries.append(entry)
-            data[tag] = entries
+            data[tag] = [_xml_semantic_mapping(m, i, builder) for i, m in enumerate(element_children(c))]
         else:
             data[tag] = _xml_dict(c)  # unknown keys are ignored by the validator
     return data
+
+
+def _xml_var_mapping(m: etree._Element) -> dict[str, Any]:
+    """``<mapping><task_id>AT1</task_id><map gm_var="r" hddl_var="?r"/>...</mapping>``."""
+    entry: dict[str, Any] = {}
+    task = _last_child(m, "task_id")
+    if task is not None:
+        entry["task_id"] = text_of(task)
+    entry["map"] = [
+        {k: v for k, v in mp.attrib.items() if k in ("gm_var", "hddl_var")}
+        for mp in m.iterchildren(tag="map")
+    ]
+    return entry
+
+
+def _xml_semantic_mapping(m: etree._Element, index: int, builder: "_Builder") -> dict[str, Any]:
+    """A semantic mapping: its fields, and its ``<map>`` read by :func:`_xml_map`."""
+    entry = _xml_dict(m)
+    mp = _last_child(m, "map")
+    if mp is not None:
+        entry["map"] = _xml_map(mp, f"semantic_mapping[{index}].map", builder)
+    return entry
 
 
 def _xml_map(mp: etree._Element, path: str, builder: "_Builder") -> dict[str, Any]:
@@ -238,7 +175,7 @@ class _Builder:
     # -- reporting ----------------------------------------------------------------------------
 
     def problem(self, path: str, message: str, hint: str = "") -> None:
-        self.problems.append(hinted(f"{self.source}: {path}", message, hint))
+        self.problems.append(Problem(f"{self.source}: {path}", message, hint))
 
     def warn(self, path: str, message: str) -> None:
         self.warnings.append(f"{self.source}: {path}: {message}")
@@ -424,59 +361,15 @@ class _Builder:
     def one_semantic(self, e: dict[str, Any], path: str) -> SemanticMapping | None:
         """One semantic mapping (spec §4); every required field of its kind is checked."""
         before = len(self.problems)
-
-        def req(key: str) -> str:
-            return self.scalar(e, key, path, f"missing key {key}") or ""
-
         kind_raw = self.scalar(e, "type", path, "missing key type")
         kind = kind_raw.lower() if kind_raw is not None else ""
         mapped_raw = self.scalar(e, "mapped_type", path, "missing key mapped_type")
         mapped = mapped_raw.lower() if mapped_raw is not None else ""
         if mapped_raw is not None and mapped not in MAPPED_TYPES:
             self.warn(f"{path}.mapped_type", f"mapped_type [{mapped_raw}] is neither predicate nor function: mapping ignored")
-        pred = ""
-        arg_sorts: tuple[str, ...] = ()
-        if "map" not in e:
-            self.problem(f"{path}.map", "missing key map")
-        else:
-            mp = self.obj(e["map"], f"{path}.map")
-            if mp is not None:
-                pred = self.scalar(mp, "pred", f"{path}.map", "missing key map.pred") or ""
-                if "arg_sorts" not in mp:
-                    self.problem(f"{path}.map.arg_sorts", "missing key map.arg_sorts")
-                else:
-                    arg_sorts = self.strings(mp["arg_sorts"], f"{path}.map.arg_sorts")
+        pred, arg_sorts = self.semantic_map(e, path)
         predicate_type = self.scalar(e, "predicate_type", path)
-        fields: dict[str, str] = {}
-        if kind_raw is None:
-            pass
-        elif kind == "attribute":
-            fields["name"] = req("name")
-            fields["relates_to"] = req("relates_to")
-            if fields["relates_to"].lower() != "robot":
-                fields["belongs_to"] = req("belongs_to")
-            else:
-                fields["belongs_to"] = self.scalar(e, "belongs_to", path) or ""
-        elif kind in ("ownership", "relationship"):
-            if kind == "ownership":
-                fields["owner"] = req("owner")
-                fields["owned"] = req("owned")
-            else:
-                fields["main_entity"] = req("main_entity")
-                fields["related_entity"] = req("related_entity")
-            fields["relationship_type"] = req("relationship_type")
-            if fields["relationship_type"] == "attribute":
-                fields["attribute_name"] = req("attribute_name")
-            fields["belongs_to"] = req("belongs_to")
-        else:
-            close = closest(kind, SEMANTIC_TYPES, cutoff=0.6)
-            self.problem(
-                f"{path}.type",
-                f"No mapping type [{kind_raw}] for semantic mappings.",
-                (f"Did you mean {close}? " if close else "")
-                + f"Set {path}.type to attribute (a field of a record), ownership (records listed "
-                "inside another record) or relationship (records related to another record).",
-            )
+        fields = self.semantic_fields(e, path, kind_raw) if kind_raw is not None else {}
         if len(self.problems) > before:
             return None
         return SemanticMapping(
@@ -488,3 +381,65 @@ class _Builder:
             where=path,
             **fields,
         )
+
+    def semantic_map(self, e: dict[str, Any], path: str) -> tuple[str, tuple[str, ...]]:
+        """The ``map`` of a semantic mapping: the HDDL predicate or function and its argument
+        sorts ("" and () when missing, with a problem)."""
+        pred = ""
+        arg_sorts: tuple[str, ...] = ()
+        if "map" not in e:
+            self.problem(f"{path}.map", "missing key map")
+            return pred, arg_sorts
+        mp = self.obj(e["map"], f"{path}.map")
+        if mp is not None:
+            pred = self.scalar(mp, "pred", f"{path}.map", "missing key map.pred") or ""
+            if "arg_sorts" not in mp:
+                self.problem(f"{path}.map.arg_sorts", "missing key map.arg_sorts")
+            else:
+                arg_sorts = self.strings(mp["arg_sorts"], f"{path}.map.arg_sorts")
+        return pred, arg_sorts
+
+    def semantic_fields(self, e: dict[str, Any], path: str, kind_raw: str) -> dict[str, str]:
+        """The fields a mapping of type ``kind_raw`` requires (spec §4), as read."""
+        kind = kind_raw.lower()
+
+        def req(key: str) -> str:
+            return self.scalar(e, key, path, f"missing key {key}") or ""
+
+        fields: dict[str, str] = {}
+        if kind == "attribute":
+            fields["name"] = req("name")
+            fields["relates_to"] = req("relates_to")
+            if fields["relates_to"].lower() != "robot":
+                fields["belongs_to"] = req("belongs_to")
+            else:
+                fields["belongs_to"] = self.scalar(e, "belongs_to", path) or ""
+        elif kind in ("ownership", "relationship"):
+            fields.update(self.relation_fields(kind, req))
+        else:
+            close = closest(kind, SEMANTIC_TYPES, cutoff=0.6)
+            self.problem(
+                f"{path}.type",
+                f"No mapping type [{kind_raw}] for semantic mappings.",
+                (f"Did you mean {close}? " if close else "")
+                + f"Set {path}.type to attribute (a field of a record), ownership (records listed "
+                "inside another record) or relationship (records related to another record).",
+            )
+        return fields
+
+    @staticmethod
+    def relation_fields(kind: str, req: Callable[[str], str]) -> dict[str, str]:
+        """Ownership (records listed inside another record) and relationship mappings: the two
+        record types, how they are related, and the owner of the predicate."""
+        fields: dict[str, str] = {}
+        if kind == "ownership":
+            fields["owner"] = req("owner")
+            fields["owned"] = req("owned")
+        else:
+            fields["main_entity"] = req("main_entity")
+            fields["related_entity"] = req("related_entity")
+        fields["relationship_type"] = req("relationship_type")
+        if fields["relationship_type"] == "attribute":
+            fields["attribute_name"] = req("attribute_name")
+        fields["belongs_to"] = req("belongs_to")
+        return fields

@@ -15,8 +15,8 @@ from typing import Any
 from lxml import etree
 
 from ..errors import MissionError, Problem, located
-from .knowledge import json_syntax_problem
-from .text import decode_utf8, read_bytes
+from .text import decode_utf8, json_syntax_problem, read_bytes
+from .tolerant_xml import source_line
 
 
 @dataclass(frozen=True)
@@ -129,8 +129,9 @@ def _from_json(doc: dict[str, Any], source: str) -> DecompositionOutput:
         where = f"{source}: tasks.{key}"
         if not isinstance(t, dict) or not isinstance(t.get("id"), str) or not isinstance(t.get("name"), str):
             raise MissionError(Problem(where, "expected a task object with string fields id and name"))
-        types = t.get("arguments") if isinstance(t.get("arguments"), dict) else {}
-        values = t.get("arguments_values") if isinstance(t.get("arguments_values"), dict) else {}
+        raw_types, raw_values = t.get("arguments"), t.get("arguments_values")
+        types: dict[str, Any] = raw_types if isinstance(raw_types, dict) else {}
+        values: dict[str, Any] = raw_values if isinstance(raw_values, dict) else {}
         arguments = tuple((str(p), str(ty), str(values.get(p, ""))) for p, ty in types.items())
         actions = []
         for a in _list(t.get("decomposition")):
@@ -175,7 +176,7 @@ def _from_xml(data: bytes, source: str) -> DecompositionOutput:
         raise MissionError(Problem(located(source, line, col), f"XML syntax error in the output: {exc.msg}")) from None
     tasks: dict[str, OutputTask] = {}
     for t in root.findall("tasks/*"):
-        where = located(source, t.sourceline)
+        where = located(source, source_line(t))
         tid, name = t.findtext("id"), t.findtext("name")
         if tid is None or name is None:
             raise MissionError(Problem(where, f"task element <{t.tag}> needs <id> and <name>"))
@@ -192,10 +193,10 @@ def _from_xml(data: bytes, source: str) -> DecompositionOutput:
     for i, c in enumerate(root.findall("constraints/*")):
         ends = _texts(c.find("task_instances"))
         if len(ends) != 2:
-            raise MissionError(Problem(located(source, c.sourceline), "a constraint needs two task instances"))
+            raise MissionError(Problem(located(source, source_line(c)), "a constraint needs two task instances"))
         kind = (c.findtext("type") or "").strip()
         if kind == "EC" and c.find("group") is None and c.find("divisible") is None:
             kind = "FB"  # a fallback constraint, as in the JSON form
-        constraints.append(OutputConstraint(kind, ends[0], ends[1], f"line {c.sourceline}"))
+        constraints.append(OutputConstraint(kind, ends[0], ends[1], f"line {source_line(c)}"))
     mds = tuple(tuple(_texts(d.find("tasks"))) for d in root.findall("mission_decompositions/*"))
     return DecompositionOutput(source, tasks, tuple(constraints), mds)

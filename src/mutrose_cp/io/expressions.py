@@ -1,4 +1,5 @@
-"""Expression languages embedded in the goal model (spec ``goal-model.md`` §5, §7–§9).
+"""Parsers of the expression languages embedded in the goal model (spec ``goal-model.md`` §5,
+§7–§9), producing the values of :mod:`mutrose_cp.model.expressions`.
 
 * runtime annotations: ``G1: text [G2;(G3#G4);FALLBACK(G5,G6)]``
 * conditions (achieve/context conditions and select bodies), with the original's quirk that
@@ -11,95 +12,24 @@ Each has a lark grammar in ``grammars/``; syntax errors raise
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
-from typing import Iterable
+from typing import Callable, Iterable, cast
 
-from lark import Lark, Transformer
+from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from ..errors import MissionError
-
-# ---------------------------------------------------------------------------------------------
-# Runtime annotations
-
-
-@dataclass(frozen=True)
-class AnnotationLeaf:
-    """A goal (``G..``) or task (anything else) reference inside an annotation."""
-
-    name: str
-
-    @property
-    def is_goal(self) -> bool:
-        return self.name.startswith("G")
-
-
-@dataclass(frozen=True)
-class AnnotationOp:
-    """``;`` (sequence), ``#`` (parallel) or ``FALLBACK``; same-kind operands are flattened."""
-
-    op: str
-    children: tuple["Annotation", ...]
-
-
-Annotation = AnnotationLeaf | AnnotationOp
-
-# ---------------------------------------------------------------------------------------------
-# Conditions
-
-
-@dataclass(frozen=True)
-class Atom:
-    """One condition atom, e.g. ``!r.is_clean``, ``r.name = "RoomA"``, ``p.name in r.patients``.
-
-    ``text`` is the atom as written (trimmed).  The structured fields are a best-effort split
-    used by evaluators: ``variable``/``attribute`` from ``v.a`` on the left, ``negated`` for a
-    leading ``!`` or ``not``, ``op`` one of ``= <> > < >= <= in`` (None for a bare ``v.a``),
-    ``value`` the right-hand side text (quotes stripped).
-    """
-
-    text: str
-    variable: str = ""
-    attribute: str = ""
-    negated: bool = False
-    op: str | None = None
-    value: str = ""
-
-
-@dataclass(frozen=True)
-class BoolOp:
-    """``&&`` or ``||`` over two or more operands."""
-
-    op: str
-    children: tuple["Condition", ...]
-
-
-Condition = Atom | BoolOp
-
-
-@dataclass(frozen=True)
-class Select:
-    """``queried->select(var:Type | condition)``; ``condition`` is None when empty."""
-
-    queried: str  # "world_db", "v" or "v.a1.a2"
-    variable: str
-    type: str
-    condition: Condition | None
-    text: str
-
-
-@dataclass(frozen=True)
-class ForAll:
-    """``iterated->forAll(iteration | condition)``; ``condition`` is None when empty."""
-
-    iterated: str
-    iteration: str
-    condition: Condition | None
-    condition_text: str
-    text: str
-
+from ..model.expressions import (
+    Annotation,
+    AnnotationLeaf,
+    AnnotationOp,
+    Atom,
+    BoolOp,
+    Condition,
+    ForAll,
+    Select,
+)
 
 # ---------------------------------------------------------------------------------------------
 # Parsers.  The Lark instances are built once (lazily, on first use) and the parse functions are
@@ -139,46 +69,66 @@ def _merge_condition(op: str, operands: Iterable[Condition]) -> BoolOp:
     return BoolOp(op, tuple(children))
 
 
-class _AnnotationBuilder(Transformer):  # type: ignore[type-arg]
+_AnnotationChild = Token | Annotation | None  # what _AnnotationBuilder's methods receive
+_ConditionChild = Token | Condition | None  # what _ConditionBuilder's methods receive
+
+
+def _annotation(node: _AnnotationChild) -> Annotation:
+    """An operand the annotation grammar makes a sub-annotation (already transformed)."""
+    if isinstance(node, (AnnotationLeaf, AnnotationOp)):
+        return node
+    raise AssertionError(f"the annotation grammar gives an operand here, not {node!r}")
+
+
+def _condition(node: _ConditionChild) -> Condition:
+    """An operand the condition grammar makes a sub-condition (already transformed)."""
+    if isinstance(node, (Atom, BoolOp)):
+        return node
+    raise AssertionError(f"the condition grammar gives an operand here, not {node!r}")
+
+
+class _AnnotationBuilder(Transformer[Token, tuple[str, Annotation | None]]):
     """Turns the ``annotation.lark`` parse into ``(id, Annotation | None)`` while parsing."""
 
-    def start(self, children: list) -> tuple[str, Annotation | None]:
+    def start(self, children: list[_AnnotationChild]) -> tuple[str, Annotation | None]:
         name, _description, annotation = children
-        return str(name), annotation
+        return str(name), None if annotation is None else _annotation(annotation)
 
-    def description(self, _children: list) -> None:
+    def description(self, _children: list[_AnnotationChild]) -> None:
         return None
 
-    def annot(self, children: list) -> Annotation | None:
-        return children[0]  # None for empty brackets
+    def annot(self, children: list[_AnnotationChild]) -> Annotation | None:
+        operand = children[0]  # None for empty brackets
+        return None if operand is None else _annotation(operand)
 
-    def leaf(self, children: list) -> AnnotationLeaf:
+    def leaf(self, children: list[_AnnotationChild]) -> AnnotationLeaf:
         return AnnotationLeaf(str(children[0]))
 
-    def seq_op(self, children: list) -> AnnotationOp:
-        return _merge_annotation(";", children)
+    def seq_op(self, children: list[_AnnotationChild]) -> AnnotationOp:
+        return _merge_annotation(";", map(_annotation, children))
 
-    def par_op(self, children: list) -> AnnotationOp:
-        return _merge_annotation("#", children)
+    def par_op(self, children: list[_AnnotationChild]) -> AnnotationOp:
+        return _merge_annotation("#", map(_annotation, children))
 
-    def fallback_op(self, children: list) -> AnnotationOp:
-        return _merge_annotation("FALLBACK", children)
+    def fallback_op(self, children: list[_AnnotationChild]) -> AnnotationOp:
+        return _merge_annotation("FALLBACK", map(_annotation, children))
 
 
-class _ConditionBuilder(Transformer):  # type: ignore[type-arg]
+class _ConditionBuilder(Transformer[Token, Condition | None]):
     """Turns the ``condition.lark`` parse into a :data:`Condition` (or None) while parsing."""
 
-    def start(self, children: list) -> Condition | None:
-        return children[0]
+    def start(self, children: list[_ConditionChild]) -> Condition | None:
+        condition = children[0]  # None for an empty condition
+        return None if condition is None else _condition(condition)
 
-    def atom(self, children: list) -> Atom:
+    def atom(self, children: list[_ConditionChild]) -> Atom:
         return make_atom(str(children[0]))
 
-    def and_op(self, children: list) -> BoolOp:
-        return _merge_condition("&&", children)
+    def and_op(self, children: list[_ConditionChild]) -> BoolOp:
+        return _merge_condition("&&", map(_condition, children))
 
-    def or_op(self, children: list) -> BoolOp:
-        return _merge_condition("||", children)
+    def or_op(self, children: list[_ConditionChild]) -> BoolOp:
+        return _merge_condition("||", map(_condition, children))
 
 
 @lru_cache(maxsize=None)
@@ -258,12 +208,13 @@ def _error_position(err: UnexpectedInput, text: str) -> int:
     if isinstance(err, UnexpectedToken):
         if err.token.type == "$END":
             return len(text)
-        return int(err.token.start_pos or 0)
+        return err.token.start_pos or 0
     if isinstance(err, UnexpectedEOF):
         return len(text)
     if isinstance(err, UnexpectedCharacters):
-        return int(err.pos_in_stream)
-    return int(getattr(err, "pos_in_stream", 0) or 0)
+        return err.pos_in_stream or 0  # always set by the lexer that raises it
+    position: int | None = getattr(err, "pos_in_stream", 0)
+    return position or 0
 
 
 def _expected_terminals(parser: Lark, text: str, err: UnexpectedInput, pos: int) -> set[str]:
@@ -279,7 +230,9 @@ def _expected_terminals(parser: Lark, text: str, err: UnexpectedInput, pos: int)
         for token in interactive.iter_parse():  # yields each token before feeding it
             if token.start_pos is not None and token.start_pos >= pos:
                 break
-        return set(interactive.accepts())
+        # lark leaves InteractiveParser.accepts unannotated; it returns the terminal names
+        accepts = cast(Callable[[], set[str]], interactive.accepts)
+        return set(accepts())
     except UnexpectedInput:
         pass
     if isinstance(err, (UnexpectedToken, UnexpectedEOF)):
@@ -305,7 +258,8 @@ def parse_node_text(text: str) -> tuple[str, Annotation | None]:
     (the column then counts from its ``[``), else the whole text.
     """
     try:
-        return _annotation_parser().parse(text)  # type: ignore[no-any-return]
+        # with a transformer attached, Lark.parse returns what the transformer's start() returns
+        return cast("tuple[str, Annotation | None]", _annotation_parser().parse(text))
     except UnexpectedInput as err:
         raise _annotation_error(text, err) from None
 
@@ -367,7 +321,8 @@ def make_atom(text: str) -> Atom:
 def _parse_condition_in(source: str, what: str, shown: str, offset: int) -> Condition | None:
     """Parse ``source``, which sits at ``offset`` inside ``shown`` (for error columns)."""
     try:
-        return _condition_parser().parse(source)  # type: ignore[no-any-return]
+        # with a transformer attached, Lark.parse returns what the transformer's start() returns
+        return cast("Condition | None", _condition_parser().parse(source))
     except UnexpectedInput as err:
         pos = _error_position(err, source)
         terminals = _expected_terminals(_condition_parser(), source, err, pos)

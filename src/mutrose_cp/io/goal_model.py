@@ -11,114 +11,19 @@ import math
 import os
 import re
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Any, Callable, TypeVar
 
 from ..errors import MissionError, Problem, closest
+from ..model.goal_model import Context, GMNode, GoalModel, RobotNumber, VarDecl
 from .expressions import (
     FORALL_HINT,
     SELECT_HINT,
-    Annotation,
-    Condition,
-    ForAll,
-    Select,
     parse_condition,
     parse_forall,
     parse_node_text,
     parse_select,
 )
-from .knowledge import base_type, hinted, json_depth_problem, json_syntax_problem
-from .text import decode_utf8, read_bytes
-
-
-@dataclass(frozen=True)
-class VarDecl:
-    """A ``Controls``/``Monitors`` declaration ``name : Type`` (type may be empty)."""
-
-    name: str
-    type: str = ""
-
-    @property
-    def is_collection(self) -> bool:
-        return "SEQUENCE" in self.type.upper()
-
-    @property
-    def base_type(self) -> str:
-        return base_type(self.type)
-
-
-@dataclass(frozen=True)
-class Context:
-    """A ``CreationCondition``: ``kind`` is ``trigger`` or ``condition``."""
-
-    kind: str
-    text: str  # the quoted text (event string, or condition source)
-    condition: Condition | None = None  # parsed for condition contexts
-
-
-@dataclass(frozen=True)
-class RobotNumber:
-    """``RobotNumber``: fixed ``n`` (``min == max``, ``fixed``) or a range ``[a,b]``."""
-
-    min: int
-    max: int
-    fixed: bool
-
-
-@dataclass(frozen=True)
-class GMNode:
-    uid: str  # piStar node id
-    id: str  # "G3", "AT1"
-    kind: str  # "goal" | "task"
-    text: str
-    x: float
-    y: float
-    goal_type: str = "Perform"  # "Perform" | "Achieve" | "Query" | (odd value kept, warned)
-    controls: tuple[VarDecl, ...] = ()
-    monitors: tuple[VarDecl, ...] = ()
-    context: Context | None = None
-    forall: ForAll | None = None  # universal achieve condition
-    achieve_condition: Condition | None = None  # plain (non-forAll) achieve condition
-    achieve_text: str = ""  # raw AchieveCondition ("" when absent)
-    query: Select | None = None
-    group: bool = True
-    divisible: bool = True
-    location: str | None = None
-    params: tuple[str, ...] = ()
-    robot_number: RobotNumber | None = None
-    annotation: Annotation | None = None  # None: no annotation / empty brackets
-    task_name: str | None = None  # HDDL abstract task name (tasks only)
-    children: tuple[str, ...] = ()  # keys, left to right
-    parent: str | None = None
-    or_decomposed: bool = False  # some child link is an OR refinement
-    # unique key: the id, or ``id#k`` for the k-th node reusing an id (ids are not checked for
-    # uniqueness by the original; the structure must still tell such nodes apart)
-    key: str = ""
-
-    def __post_init__(self) -> None:
-        if not self.key:
-            object.__setattr__(self, "key", self.id)
-
-
-@dataclass(frozen=True)
-class GoalModel:
-    source: str
-    nodes: tuple[GMNode, ...]  # final vertex order of the original (goal-model.md §3)
-    root: str
-    dfs: tuple[str, ...]  # depth-first order from the root, children left to right
-    warnings: tuple[str, ...] = ()
-
-    @cached_property
-    def by_id(self) -> dict[str, GMNode]:
-        """Nodes by unique key; a plain id names the first node with that id."""
-        out: dict[str, GMNode] = {n.key: n for n in self.nodes}
-        for n in self.nodes:
-            out.setdefault(n.id, n)
-        return out
-
-    def node(self, key: str) -> GMNode:
-        return self.by_id[key]
-
+from .text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
 
 # ---------------------------------------------------------------------------------------------
 # Reader
@@ -293,6 +198,24 @@ def _property_hint(key: str) -> str:
     return f"Remove it or use one of the known (case-sensitive) keys: {known}."
 
 
+def _node_id(kind: str | None, text: str | None) -> str:
+    """The goal (``G3``) or task (``AT1``) id at the start of a node's text; "" when absent."""
+    if not kind or text is None:
+        return ""
+    head = text.split(":", 1)[0]
+    id_match = (_GOAL_ID if kind == "goal" else _TASK_ID).search(head)
+    return id_match.group() if id_match else ""
+
+
+def _node_where(kind: str | None, node_id: str, uid: str | None, index: int) -> str:
+    """How problems name a node: by its id, else its piStar id, else its position."""
+    if node_id:
+        return f"{kind} {node_id}"
+    if uid is not None:
+        return f"node {uid}"
+    return f"node #{index + 1}"
+
+
 @dataclass
 class _Draft:
     """A node as read, before the tree fields (children/parent/or_decomposed) are known."""
@@ -328,7 +251,7 @@ class _Reader:
         return f"{self.source}: {what}" if self.source else what
 
     def problem(self, what: str, message: str, hint: str = "") -> None:
-        self.problems.append(hinted(self._where(what), message, hint))
+        self.problems.append(Problem(self._where(what), message, hint))
 
     def warn(self, what: str, message: str) -> None:
         self.warnings.append(str(Problem(self._where(what), message)))
@@ -355,11 +278,27 @@ class _Reader:
         top = self.source or "goal model"
         if not isinstance(data, dict):
             raise MissionError("the goal model must be a JSON object (piStar format)", self.source)
+        raw_nodes = self._raw_nodes(data)
+        raw_links = data.get("links")
+        if not isinstance(raw_links, list):
+            self.problem("links", "the goal model has no 'links' array")
+            raw_links = []
+
+        drafts = [d for i, raw in enumerate(raw_nodes or []) if (d := self._read_node(i, raw)) is not None]
+        by_uid = self._index_by_uid(drafts)
+        links = [k for i, raw in enumerate(raw_links) if (k := self._read_link(i, raw, by_uid)) is not None]
+        self._raise_if_problems()
+        if not drafts:
+            raise MissionError("the goal model has no nodes", top)
+        return self._build(drafts, links)
+
+    def _raw_nodes(self, data: dict[str, Any]) -> Any:
+        """The node list the original reads: it overwrites its node list for every actor that
+        has one, so the last actor with nodes wins."""
         actors = data.get("actors")
         if not isinstance(actors, list) or not actors:
             self.problem("actors", "the goal model has no 'actors' array with an actor")
             actors = []
-        # The original overwrites its node list for every actor that has one: the last wins.
         raw_nodes: Any = None
         for actor in actors:
             if isinstance(actor, dict) and "nodes" in actor:
@@ -368,12 +307,11 @@ class _Reader:
             self.warn("actors", f"{len(actors)} actors: only the nodes of the last actor with nodes are used")
         if actors and not isinstance(raw_nodes, list):
             self.problem("actors", "no actor has a 'nodes' array")
-        raw_links = data.get("links")
-        if not isinstance(raw_links, list):
-            self.problem("links", "the goal model has no 'links' array")
-            raw_links = []
+        return raw_nodes
 
-        drafts = [d for i, raw in enumerate(raw_nodes or []) if (d := self._read_node(i, raw)) is not None]
+    def _index_by_uid(self, drafts: list[_Draft]) -> dict[str, int]:
+        """piStar id -> position in ``drafts``, which links refer to; a reused id is a problem
+        (the first node keeps it)."""
         by_uid: dict[str, int] = {}
         for position, draft in enumerate(drafts):
             if draft.uid in by_uid:
@@ -381,11 +319,7 @@ class _Reader:
                 self.problem(draft.where, f"duplicate piStar node id {draft.uid} (also used by {other.where})")
             else:
                 by_uid[draft.uid] = position
-        links = [k for i, raw in enumerate(raw_links) if (k := self._read_link(i, raw, by_uid)) is not None]
-        self._raise_if_problems()
-        if not drafts:
-            raise MissionError("the goal model has no nodes", top)
-        return self._build(drafts, links)
+        return by_uid
 
     # -- nodes ----------------------------------------------------------------------------------
 
@@ -397,47 +331,13 @@ class _Reader:
         text = _scalar_text(raw["text"]) if "text" in raw else None
         node_type = _scalar_text(raw["type"]) if "type" in raw else None
         kind = {ISTAR_GOAL: "goal", ISTAR_TASK: "task"}.get(node_type or "")
-        head = (text or "").split(":", 1)[0]
-        id_match = (_GOAL_ID if kind == "goal" else _TASK_ID).search(head) if kind and text is not None else None
-        node_id = id_match.group() if id_match else ""
-        if node_id:
-            where = f"{kind} {node_id}"
-        elif uid is not None:
-            where = f"node {uid}"
-        else:
-            where = f"node #{index + 1}"
+        node_id = _node_id(kind, text)
+        where = _node_where(kind, node_id, uid, index)
 
-        ok = True  # False once a problem makes the node unreadable
-        missing = [k for k in ("id", "text", "type", "x", "y", "customProperties") if k not in raw]
-        if missing:
-            self.problem(where, "node is missing " + ", ".join(repr(k) for k in missing))
-            ok = False
-        for key, value in (("id", uid), ("text", text), ("type", node_type)):
-            if key in raw and value is None:
-                self.problem(where, f"node {key!r} must be a string")
-                ok = False
-        coordinates: dict[str, float] = {}
-        for axis in ("x", "y"):
-            if axis in raw:
-                number = _number(raw[axis])
-                if number is None:
-                    self.problem(where, f"node {axis!r} must be a number, not {json.dumps(raw[axis])}")
-                    ok = False
-                else:
-                    coordinates[axis] = number
-        props: dict[str, str] = {}
-        raw_props = raw.get("customProperties", {})
-        if not isinstance(raw_props, dict):
-            self.problem(where, "node 'customProperties' must be a JSON object")
-            ok = False
-        else:
-            for key, value in raw_props.items():
-                value_text = _scalar_text(value)
-                if value_text is None:
-                    self.problem(where, f"custom property {key} must be a string")
-                    ok = False
-                else:
-                    props[key] = value_text
+        ok = self._check_node_keys(where, raw, {"id": uid, "text": text, "type": node_type})
+        coordinates, numeric = self._coordinates(where, raw)
+        props = self._custom_properties(where, raw)
+        ok = ok and numeric and props is not None
         if node_type is not None and kind is None:
             self.problem(where, f"unsupported node type {node_type}: only {ISTAR_GOAL} and {ISTAR_TASK} are supported")
             ok = False
@@ -447,7 +347,7 @@ class _Reader:
         # dangling; the model is only built when no problem was found.
         fields: dict[str, Any] = {"text": text, "y": coordinates.get("y", 0.0)}
         draft = _Draft(index, uid, node_id, kind or "", coordinates.get("x", 0.0), where, fields)
-        if not ok or text is None or kind is None:
+        if not ok or text is None or kind is None or props is None:
             return draft
         if kind == "goal":
             if self._read_goal_text(where, text, node_id):
@@ -456,6 +356,52 @@ class _Reader:
             self._read_task_text(where, text, node_id, fields)
         self._read_properties(where, node_id, text, props, fields)
         return draft
+
+    def _check_node_keys(self, where: str, raw: dict[str, Any], texts: dict[str, str | None]) -> bool:
+        """Every key a node needs is present, and ``id``/``text``/``type`` (read into ``texts``)
+        are scalars; False when a problem was reported."""
+        ok = True
+        missing = [k for k in ("id", "text", "type", "x", "y", "customProperties") if k not in raw]
+        if missing:
+            self.problem(where, "node is missing " + ", ".join(repr(k) for k in missing))
+            ok = False
+        for key, value in texts.items():
+            if key in raw and value is None:
+                self.problem(where, f"node {key!r} must be a string")
+                ok = False
+        return ok
+
+    def _coordinates(self, where: str, raw: dict[str, Any]) -> tuple[dict[str, float], bool]:
+        """``x`` and ``y`` as numbers (those present and numeric), and whether none was refused."""
+        coordinates: dict[str, float] = {}
+        ok = True
+        for axis in ("x", "y"):
+            if axis in raw:
+                number = _number(raw[axis])
+                if number is None:
+                    self.problem(where, f"node {axis!r} must be a number, not {json.dumps(raw[axis])}")
+                    ok = False
+                else:
+                    coordinates[axis] = number
+        return coordinates, ok
+
+    def _custom_properties(self, where: str, raw: dict[str, Any]) -> dict[str, str] | None:
+        """``customProperties`` as texts, the way the original's property tree holds them;
+        None when it is not an object or a value is not a scalar."""
+        raw_props = raw.get("customProperties", {})
+        if not isinstance(raw_props, dict):
+            self.problem(where, "node 'customProperties' must be a JSON object")
+            return None
+        props: dict[str, str] = {}
+        ok = True
+        for key, value in raw_props.items():
+            value_text = _scalar_text(value)
+            if value_text is None:
+                self.problem(where, f"custom property {key} must be a string")
+                ok = False
+            else:
+                props[key] = value_text
+        return props if ok else None
 
     def _read_goal_text(self, where: str, text: str, node_id: str) -> bool:
         if not node_id:
@@ -484,7 +430,10 @@ class _Reader:
     def _read_properties(
         self, where: str, node_id: str, text: str, props: dict[str, str], fields: dict[str, Any]
     ) -> None:
-        """Interpret every custom property (spec §4, §6–§8) into ``fields``; errors become problems."""
+        """Interpret every custom property (spec §4, §6–§8) into ``fields``; errors become problems.
+
+        The properties are read in a fixed order (the order in which their problems are
+        reported), whatever their order in the file."""
         for key in props:
             if key not in KNOWN_PROPERTIES:
                 self.problem(where, f"Invalid property {key} in vertex {text}", _property_hint(key))
@@ -494,36 +443,47 @@ class _Reader:
             self.warn(where, f"Invalid goal type on node [{node_id}]: [{goal_type}]. Defaulting to Perform type.")
         fields["goal_type"] = goal_type
 
+        self._read_variables(where, props, fields)
+        if "CreationCondition" in props:
+            fields["context"] = self._read_context(where, props["CreationCondition"])
+        if "AchieveCondition" in props:
+            self._read_achieve_condition(where, props["AchieveCondition"], fields)
+        # A Query goal without QueriedProperty fails like an empty one, as in the original.
+        if goal_type == "Query" or "QueriedProperty" in props:
+            queried = props.get("QueriedProperty", "")
+            fields["query"] = self._attempt(where, "QueriedProperty: ", lambda: parse_select(queried))
+        self._read_flags(where, props, fields)
+        self._read_task_properties(where, props, fields)
+
+    def _read_variables(self, where: str, props: dict[str, str], fields: dict[str, Any]) -> None:
+        """``Controls`` and ``Monitors``: the variables a goal binds and reads."""
         for key, attr in (("Controls", "controls"), ("Monitors", "monitors")):
             if key in props:
                 value = props[key]
                 decls = self._attempt(where, f"{key}: ", lambda: parse_var_decls(value))
                 fields[attr] = decls or ()
 
-        if "CreationCondition" in props:
-            fields["context"] = self._read_context(where, props["CreationCondition"])
+    def _read_achieve_condition(self, where: str, achieve: str, fields: dict[str, Any]) -> None:
+        """``AchieveCondition``: a universal ``forAll`` (which makes the goal iterate) or a
+        plain condition."""
+        fields["achieve_text"] = achieve
+        if "forAll" in achieve:
+            fields["forall"] = self._attempt(where, "AchieveCondition: ", lambda: parse_forall(achieve))
+        else:
+            fields["achieve_condition"] = self._attempt(
+                where, "AchieveCondition: ", lambda: parse_condition(achieve)
+            )
 
-        if "AchieveCondition" in props:
-            achieve = props["AchieveCondition"]
-            fields["achieve_text"] = achieve
-            if "forAll" in achieve:
-                fields["forall"] = self._attempt(where, "AchieveCondition: ", lambda: parse_forall(achieve))
-            else:
-                fields["achieve_condition"] = self._attempt(
-                    where, "AchieveCondition: ", lambda: parse_condition(achieve)
-                )
-
-        # A Query goal without QueriedProperty fails like an empty one, as in the original.
-        if goal_type == "Query" or "QueriedProperty" in props:
-            queried = props.get("QueriedProperty", "")
-            fields["query"] = self._attempt(where, "QueriedProperty: ", lambda: parse_select(queried))
-
+    def _read_flags(self, where: str, props: dict[str, str], fields: dict[str, Any]) -> None:
+        """``Group`` and ``Divisible``: True unless written False (an odd value is warned)."""
         for key, attr in (("Group", "group"), ("Divisible", "divisible")):
-            value, recognised = _flag(props.get(key))
+            flag, recognised = _flag(props.get(key))
             if not recognised:
                 self.warn(where, f"{key} value {props[key]!r} is neither True nor False; using True")
-            fields[attr] = value
+            fields[attr] = flag
 
+    def _read_task_properties(self, where: str, props: dict[str, str], fields: dict[str, Any]) -> None:
+        """``Location``, ``Params`` and ``RobotNumber``: what an execution of the task needs."""
         if "Location" in props:
             fields["location"] = props["Location"].strip() or None
         if "Params" in props:
@@ -582,37 +542,50 @@ class _Reader:
         """Child order, vertex order and DFS exactly as the original (spec §3)."""
         # Links sorted by the child's x (stable, so ties keep file order).
         links = sorted(links, key=lambda k: drafts[k.child].x)
-        order: list[int] = []
-        seen: set[int] = set()
-        for link in links:
-            for v in (link.parent, link.child):
-                if v not in seen:
-                    seen.add(v)
-                    order.append(v)
-        # Nodes in no link are not vertices of the original's graph; keep them, last.
-        order.extend(i for i in range(len(drafts)) if i not in seen)
+        order = _vertex_order(len(drafts), links)
         rank = {v: r for r, v in enumerate(order)}
-
-        parents: dict[int, list[int]] = {}
-        out_edges: dict[int, list[int]] = {}
-        or_decomposed: set[int] = set()
-        for link in links:
-            parents.setdefault(link.child, []).append(link.parent)
-            out_edges.setdefault(link.parent, []).append(link.child)
-            if link.type == OR_REFINEMENT:
-                or_decomposed.add(link.parent)
-        for child, ps in parents.items():
+        tree = _Edges(links)
+        for child, ps in tree.parents.items():
             if len(ps) > 1:
                 names = ", ".join(drafts[p].id for p in ps)
                 self.problem(drafts[child].where, f"node has more than one parent ({names})")
-        roots = [v for v in order if v not in parents]
+        roots = [v for v in order if v not in tree.parents]
         if not roots:
             self.problem("goal model", "no root: every node has a parent (the links form a cycle)")
         self._raise_if_problems()
         root = roots[0]
+        dfs = self._depth_first(drafts, order, tree, root)
+        keys = _unique_keys(drafts, order)
+        nodes: list[GMNode] = []
+        for v in order:
+            d = drafts[v]
+            children = sorted(tree.out_edges.get(v, []), key=rank.__getitem__)
+            parent = tree.parents.get(v)
+            nodes.append(
+                GMNode(
+                    uid=d.uid,
+                    id=d.id,
+                    kind=d.kind,
+                    x=d.x,
+                    children=tuple(keys[c] for c in children),
+                    parent=keys[parent[0]] if parent else None,
+                    key=keys[v],
+                    or_decomposed=v in tree.or_decomposed,
+                    **d.fields,
+                )
+            )
+        return GoalModel(
+            source=self.source,
+            nodes=tuple(nodes),
+            root=keys[root],
+            dfs=tuple(keys[v] for v in dfs),
+            warnings=tuple(self.warnings),
+        )
 
-        # Depth-first, children in sorted-link order, then (like boost's depth_first_search)
-        # every vertex not reached from the root, in vertex order.
+    def _depth_first(self, drafts: list[_Draft], order: list[int], tree: _Edges, root: int) -> list[int]:
+        """Depth-first from the root, children in sorted-link order, then (like boost's
+        depth_first_search) from every vertex not reached yet, in vertex order; those are
+        warned about, as nothing above them can ever run them."""
         dfs: list[int] = []
         visited: set[int] = set()
         for start in [root] + order:
@@ -627,35 +600,44 @@ class _Reader:
                     continue
                 visited.add(v)
                 dfs.append(v)
-                stack.extend(reversed(out_edges.get(v, [])))
+                stack.extend(reversed(tree.out_edges.get(v, [])))
+        return dfs
 
-        keys: dict[int, str] = {}
-        seen_ids: dict[str, int] = {}
-        for v in order:
-            k = seen_ids[drafts[v].id] = seen_ids.get(drafts[v].id, 0) + 1
-            keys[v] = drafts[v].id if k == 1 else f"{drafts[v].id}#{k}"
-        nodes: list[GMNode] = []
-        for v in order:
-            d = drafts[v]
-            children = sorted(out_edges.get(v, []), key=rank.__getitem__)
-            parent = parents.get(v)
-            nodes.append(
-                GMNode(
-                    uid=d.uid,
-                    id=d.id,
-                    kind=d.kind,
-                    x=d.x,
-                    children=tuple(keys[c] for c in children),
-                    parent=keys[parent[0]] if parent else None,
-                    key=keys[v],
-                    or_decomposed=v in or_decomposed,
-                    **d.fields,
-                )
-            )
-        return GoalModel(
-            source=self.source,
-            nodes=tuple(nodes),
-            root=keys[root],
-            dfs=tuple(keys[v] for v in dfs),
-            warnings=tuple(self.warnings),
-        )
+
+class _Edges:
+    """The refinement links as a graph over draft positions: parents and children of every
+    node (in sorted-link order) and the nodes refined by an OR link."""
+
+    def __init__(self, links: list[_Link]) -> None:
+        self.parents: dict[int, list[int]] = {}
+        self.out_edges: dict[int, list[int]] = {}
+        self.or_decomposed: set[int] = set()
+        for link in links:
+            self.parents.setdefault(link.child, []).append(link.parent)
+            self.out_edges.setdefault(link.parent, []).append(link.child)
+            if link.type == OR_REFINEMENT:
+                self.or_decomposed.add(link.parent)
+
+
+def _vertex_order(count: int, links: list[_Link]) -> list[int]:
+    """The original's vertex order: nodes in order of first appearance in the sorted links
+    (parent before child); nodes in no link are not vertices of its graph, kept here last."""
+    order: list[int] = []
+    seen: set[int] = set()
+    for link in links:
+        for v in (link.parent, link.child):
+            if v not in seen:
+                seen.add(v)
+                order.append(v)
+    order.extend(i for i in range(count) if i not in seen)
+    return order
+
+
+def _unique_keys(drafts: list[_Draft], order: list[int]) -> dict[int, str]:
+    """Each node's key: its id, or ``id#k`` for the k-th node (in vertex order) reusing it."""
+    keys: dict[int, str] = {}
+    seen_ids: dict[str, int] = {}
+    for v in order:
+        k = seen_ids[drafts[v].id] = seen_ids.get(drafts[v].id, 0) + 1
+        keys[v] = drafts[v].id if k == 1 else f"{drafts[v].id}#{k}"
+    return keys

@@ -1,6 +1,7 @@
 """HDDL domain reader (the extended subset of the MutRoSe decomposer, spec ``hddl.md``).
 
-The domain is parsed with a lark grammar (``grammars/hddl.lark``) into frozen model objects.
+The domain is parsed with a lark grammar (``grammars/hddl.lark``) into the frozen
+:class:`~mutrose_cp.model.Domain`.
 Syntax errors and static domain errors (undeclared predicates or subtasks, arity) are raised as
 :class:`~mutrose_cp.errors.MissionError` located at ``file:line:col``.
 """
@@ -8,159 +9,28 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import lru_cache
 from importlib import resources
-from typing import Iterable
+from typing import Callable, Iterable, cast
 
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from ..errors import MissionError, Problem, closest, located
+from ..model.domain import (
+    AbstractTask,
+    Action,
+    Comparison,
+    Declaration,
+    Domain,
+    Literal,
+    Method,
+    NumericEffect,
+    Parameter,
+    Precondition,
+    Subtask,
+)
 from .text import decode_utf8, read_bytes
-
-# ---------------------------------------------------------------------------------------------
-# Model
-
-
-@dataclass(frozen=True)
-class Parameter:
-    """A typed variable ``?name - type`` (name includes the ``?``)."""
-
-    name: str
-    type: str
-
-
-@dataclass(frozen=True)
-class Literal:
-    """A boolean atom ``(pred a1 a2)`` or its negation; arguments are variables or constants."""
-
-    predicate: str
-    args: tuple[str, ...]
-    positive: bool = True
-
-
-@dataclass(frozen=True)
-class Comparison:
-    """A numeric precondition ``(= (f a..) N)`` or ``(> (f a..) N)``.
-
-    ``negated`` records ``(not (= ...))``; the original ignores it when evaluating (kept for
-    fidelity and for the documented deviation)."""
-
-    function: str
-    args: tuple[str, ...]
-    op: str  # "=" or ">"
-    value: int | float
-    negated: bool = False
-
-
-@dataclass(frozen=True)
-class NumericEffect:
-    """``(increase|decrease|assign (f a..) N)`` with an integer amount."""
-
-    kind: str  # "increase" | "decrease" | "assign"
-    function: str
-    args: tuple[str, ...]
-    amount: int
-
-
-Condition = Literal | Comparison
-
-
-@dataclass(frozen=True)
-class Declaration:
-    """A predicate or function declaration ``(name ?a - t1 ?b - t2)``."""
-
-    name: str
-    parameters: tuple[Parameter, ...]
-
-
-@dataclass(frozen=True)
-class AbstractTask:
-    name: str
-    parameters: tuple[Parameter, ...]
-    line: int = 0
-    column: int = 0
-
-
-@dataclass(frozen=True)
-class Action:
-    name: str
-    parameters: tuple[Parameter, ...]
-    capabilities: tuple[str, ...] = ()
-    preconditions: tuple[Condition, ...] = ()  # flattened conjunction, declaration order
-    effects: tuple[Literal, ...] = ()
-    numeric_effects: tuple[NumericEffect, ...] = ()
-    line: int = 0
-    column: int = 0
-
-
-@dataclass(frozen=True)
-class Subtask:
-    """One step of a method's task network; ``id`` is the declared id or ``__t_id_<n>``."""
-
-    id: str
-    task: str
-    args: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class Method:
-    name: str
-    parameters: tuple[Parameter, ...]
-    task: str
-    task_args: tuple[str, ...]
-    preconditions: tuple[Condition, ...] = ()
-    effects: tuple[Literal, ...] = ()
-    numeric_effects: tuple[NumericEffect, ...] = ()
-    subtasks: tuple[Subtask, ...] = ()
-    # (before, after) pairs of subtask ids; for :ordered-subtasks the chain of consecutive ids
-    ordering: tuple[tuple[str, str], ...] = ()
-    ordered: bool = False  # declared with :ordered-subtasks / :ordered-tasks
-    line: int = 0
-    column: int = 0
-
-
-@dataclass(frozen=True)
-class Domain:
-    name: str
-    source: str  # file name used in error locations
-    # type -> parent (None when declared without parent); robot/robotteam are added as the
-    # original does (subtypes of the parent of the first "- object" declaration, else roots)
-    types: tuple[tuple[str, str | None], ...]
-    constants: tuple[tuple[str, str], ...]  # (constant, type)
-    predicates: tuple[Declaration, ...]
-    functions: tuple[Declaration, ...]
-    capabilities: tuple[str, ...]
-    tasks: tuple[AbstractTask, ...]
-    actions: tuple[Action, ...]
-    methods: tuple[Method, ...]  # declaration order
-
-    @cached_property
-    def parent_of(self) -> dict[str, str | None]:
-        return dict(self.types)
-
-    @cached_property
-    def task_by_name(self) -> dict[str, AbstractTask]:
-        return {t.name: t for t in self.tasks}
-
-    @cached_property
-    def action_by_name(self) -> dict[str, Action]:
-        return {a.name: a for a in self.actions}
-
-    def methods_of(self, task: str) -> tuple[Method, ...]:
-        """Methods decomposing ``task`` in declaration order (defines decomposition numbering)."""
-        return tuple(m for m in self.methods if m.task == task)
-
-    @cached_property
-    def robot_sorts(self) -> frozenset[str]:
-        """``robot``, ``robotteam`` and the types declared *directly* below them (the
-        original's "robot-related sorts"; deeper subtypes do not count)."""
-        direct = {t for t, p in self.types if p in ("robot", "robotteam")}
-        return frozenset({"robot", "robotteam"} | direct)
-
-    def predicate_declarations(self, name: str) -> tuple[Declaration, ...]:
-        return tuple(p for p in self.predicates if p.name == name)
-
 
 # ---------------------------------------------------------------------------------------------
 # Reader
@@ -286,14 +156,21 @@ def _innermost_unclosed_paren(text: str) -> tuple[int, int] | None:
     return stack[-1] if stack else None
 
 
+def _accepted_terminals(exc: UnexpectedInput) -> set[str]:
+    """The terminals the parser would have accepted where it failed (empty when unknown)."""
+    if exc.interactive_parser is None:
+        return set()
+    # lark leaves InteractiveParser.accepts unannotated; it returns the set of terminal names
+    accepts = cast(Callable[[], set[str]], exc.interactive_parser.accepts)
+    try:
+        return set(accepts())
+    except Exception:  # accepts() replays the parser; never let it hide the real error
+        return set()
+
+
 def _syntax_problem(exc: UnexpectedInput, text: str, source: str) -> Problem:
     """Turn a lark error into ``file:line:col: syntax error: expected ..., found ...``."""
-    expected: set[str] = set()
-    if exc.interactive_parser is not None:
-        try:
-            expected = set(exc.interactive_parser.accepts())
-        except Exception:  # accepts() replays the parser; never let it hide the real error
-            expected = set()
+    expected = _accepted_terminals(exc)
     if isinstance(exc, UnexpectedToken):
         expected = expected or set(exc.expected)
         token = exc.token
@@ -309,16 +186,58 @@ def _syntax_problem(exc: UnexpectedInput, text: str, source: str) -> Problem:
             message += f" ('{token.value}' is a reserved word and cannot be used as a name)"
         return Problem(located(source, token.line, token.column), message)
     if isinstance(exc, UnexpectedCharacters):
-        char = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else ""
+        pos = exc.pos_in_stream  # always set by the lexer that raises UnexpectedCharacters
+        char = text[pos] if pos is not None and pos < len(text) else ""
         message = f"syntax error: {_expected_phrase(expected)}found invalid character '{char}'"
         return Problem(located(source, exc.line, exc.column), message)
-    line, column = getattr(exc, "line", None), getattr(exc, "column", None)  # UnexpectedEOF
-    return Problem(located(source, line, column), f"syntax error: {exc}")
+    eof_line: int | None = getattr(exc, "line", None)  # UnexpectedEOF
+    eof_column: int | None = getattr(exc, "column", None)
+    return Problem(located(source, eof_line, eof_column), f"syntax error: {exc}")
 
 
 # --- tree reading and static checks -----------------------------------------------------------
+#
+# lark types every child of a tree as ``Token | Tree``, and an optional clause ``[...]`` may also
+# be None (``maybe_placeholders``).  The grammar fixes which one each position holds; these
+# accessors check it once, where the child is taken, so the reader below works on precise types.
 
-_Where = Token | Tree | tuple[int, int]
+_Where = Token | Tree[Token] | tuple[int, int]
+
+
+def _token(node: object) -> Token:
+    """A child the grammar makes a terminal (a name, variable, number or kept keyword)."""
+    if isinstance(node, Token):
+        return node
+    raise AssertionError(f"the HDDL grammar gives a token here, not {node!r}")
+
+
+def _tree(node: object) -> Tree[Token]:
+    """A child the grammar makes a rule."""
+    if isinstance(node, Tree):
+        return node
+    raise AssertionError(f"the HDDL grammar gives a rule here, not {node!r}")
+
+
+def _optional_tree(node: object) -> Tree[Token] | None:
+    """An optional clause ``[...]`` of the grammar: None when the domain omits it."""
+    return None if node is None else _tree(node)
+
+
+def _tokens(nodes: Iterable[object]) -> list[Token]:
+    return [_token(n) for n in nodes]
+
+
+def _trees(nodes: Iterable[object]) -> list[Tree[Token]]:
+    return [_tree(n) for n in nodes]
+
+
+def _position(token: Token) -> tuple[int, int]:
+    """``(line, column)`` of a token (the parser propagates positions, so both are set)."""
+    return token.line or 0, token.column or 0
+
+
+def _values(tokens: Iterable[Token]) -> tuple[str, ...]:
+    return tuple(t.value for t in tokens)
 
 
 @dataclass
@@ -354,7 +273,7 @@ class _DomainReader:
 
     def _error(self, where: _Where, message: str) -> None:
         if isinstance(where, Token):
-            line, column = where.line or 0, where.column or 0
+            line, column = _position(where)
         elif isinstance(where, Tree):
             line, column = getattr(where.meta, "line", 0), getattr(where.meta, "column", 0)
         else:
@@ -370,41 +289,18 @@ class _DomainReader:
 
     # ---- entry point
 
-    def read(self, tree: Tree) -> Domain:
+    def read(self, tree: Tree[Token]) -> Domain:
         name_token, *sections = tree.children
         self._check_reserved_names(tree)
-        bodies: list[Tree] = []
-        for section in sections:
-            kind = section.data
-            if kind in ("task_def", "action_def", "method_def"):
-                bodies.append(section)
-            elif kind == "types":
-                self._read_types(section)
-            elif kind == "constants":
-                self._read_constants(section)
-            elif kind == "predicates":
-                self.predicates.extend(self._read_declaration(d) for d in section.children)
-            elif kind == "functions":
-                self.functions.extend(
-                    self._read_declaration(d) for d in section.children if d.data == "atomic_decl"
-                )
-            elif kind == "capabilities":
-                self.capabilities.extend(str(t) for t in section.children)
-            # requirements and rewards are ignored (hddl.md §2)
+        bodies = self._read_declarations(_trees(sections))
         types = self._build_types()
         self._known_types = {t for t, _ in types} | {p for _, p in types if p} | set(_NATIVE_TYPES)
 
-        task_trees = [b for b in bodies if b.data != "method_def"]
         declared_at: dict[str, tuple[str, Token]] = {}
-        for body in task_trees:
-            self._read_task_or_action(body, declared_at)
-        methods: list[Method] = []
-        method_names: dict[str, Token] = {}
         for body in bodies:
-            if body.data == "method_def":
-                method = self._read_method(body, method_names)
-                if method is not None:
-                    methods.append(method)
+            if body.data != "method_def":
+                self._read_task_or_action(body, declared_at)
+        methods = self._read_methods([b for b in bodies if b.data == "method_def"])
         self._raise_if_problems()
         return Domain(
             name=str(name_token),
@@ -419,7 +315,39 @@ class _DomainReader:
             methods=tuple(methods),
         )
 
-    def _check_reserved_names(self, tree: Tree) -> None:
+    def _read_declarations(self, sections: list[Tree[Token]]) -> list[Tree[Token]]:
+        """Read the declaration sections; return the task, action and method bodies in file
+        order, to be read once every declaration is known (sections may come in any order)."""
+        bodies: list[Tree[Token]] = []
+        for section in sections:
+            kind = section.data
+            if kind in ("task_def", "action_def", "method_def"):
+                bodies.append(section)
+            elif kind == "types":
+                self._read_types(section)
+            elif kind == "constants":
+                self._read_constants(section)
+            elif kind == "predicates":
+                self.predicates.extend(self._read_declaration(d) for d in _trees(section.children))
+            elif kind == "functions":
+                self.functions.extend(
+                    self._read_declaration(d) for d in _trees(section.children) if d.data == "atomic_decl"
+                )
+            elif kind == "capabilities":
+                self.capabilities.extend(str(t) for t in section.children)
+            # requirements and rewards are ignored (hddl.md §2)
+        return bodies
+
+    def _read_methods(self, bodies: list[Tree[Token]]) -> list[Method]:
+        method_names: dict[str, Token] = {}
+        methods: list[Method] = []
+        for body in bodies:
+            method = self._read_method(body, method_names)
+            if method is not None:
+                methods.append(method)
+        return methods
+
+    def _check_reserved_names(self, tree: Tree[Token]) -> None:
         # Every other reserved word is a terminal and already a syntax error where a name goes.
         for token in tree.scan_values(
             lambda v: isinstance(v, Token) and v.type == "NAME" and v.value in _RESERVED_NAMES
@@ -432,13 +360,13 @@ class _DomainReader:
         if sort not in self._mentioned_sorts:
             self._mentioned_sorts.append(sort)
 
-    def _read_types(self, section: Tree) -> None:
+    def _read_types(self, section: Tree[Token]) -> None:
         pending: list[str] = []
         for item in section.children:
             if isinstance(item, Token):
                 pending.append(item.value)
                 continue
-            minus, parent = item.children
+            minus, parent = _tokens(item.children)
             if not pending:
                 self._error(minus, f"'- {parent}' is not preceded by any type name")
                 continue
@@ -448,18 +376,18 @@ class _DomainReader:
         if pending:
             self._type_groups.append((pending, None))
 
-    def _read_constants(self, section: Tree) -> None:
-        for group in section.children:
-            *names, _minus, sort = group.children
+    def _read_constants(self, section: Tree[Token]) -> None:
+        for group in _trees(section.children):
+            *names, _minus, sort = _tokens(group.children)
             self._mention_sort(sort.value)
             self.constants.extend((n.value, sort.value) for n in names)
 
-    def _read_declaration(self, decl: Tree) -> Declaration:
+    def _read_declaration(self, decl: Tree[Token]) -> Declaration:
         name, typed_vars = decl.children
-        parameters = tuple(Parameter(v.value, t.value) for v, t in self._typed_vars(typed_vars))
+        parameters = tuple(Parameter(v.value, t.value) for v, t in self._typed_vars(_tree(typed_vars)))
         for parameter in parameters:
             self._mention_sort(parameter.type)
-        return Declaration(name.value, parameters)
+        return Declaration(_token(name).value, parameters)
 
     def _build_types(self) -> tuple[tuple[str, str | None], ...]:
         """(type, parent) in declaration order, with the native sorts of hddl.md §2.1.
@@ -488,14 +416,14 @@ class _DomainReader:
                 known.add(sort)
         return tuple(types)
 
-    def _typed_vars(self, tree: Tree) -> list[tuple[Token, Token]]:
+    def _typed_vars(self, tree: Tree[Token]) -> list[tuple[Token, Token]]:
         pairs: list[tuple[Token, Token]] = []
-        for group in tree.children:
-            *variables, _minus, sort = group.children
+        for group in _trees(tree.children):
+            *variables, _minus, sort = _tokens(group.children)
             pairs.extend((v, sort) for v in variables)
         return pairs
 
-    def _parameters(self, tree: Tree, owner: str) -> tuple[Parameter, ...]:
+    def _parameters(self, tree: Tree[Token], owner: str) -> tuple[Parameter, ...]:
         """Typed parameters of a task/action/method; checks sorts and duplicate variables."""
         seen: set[str] = set()
         parameters: list[Parameter] = []
@@ -510,8 +438,9 @@ class _DomainReader:
 
     # ---- abstract tasks and actions
 
-    def _read_task_or_action(self, tree: Tree, declared_at: dict[str, tuple[str, Token]]) -> None:
-        name, params, capabilities, precondition, effect, _reliability = tree.children
+    def _read_task_or_action(self, tree: Tree[Token], declared_at: dict[str, tuple[str, Token]]) -> None:
+        name_node, params, capabilities_node, precondition, effect, _reliability = tree.children
+        name = _token(name_node)
         kind = "abstract task" if tree.data == "task_def" else "action"
         owner = f"{kind} '{name.value}'"
         if name.value in declared_at:
@@ -523,30 +452,33 @@ class _DomainReader:
             )
             return
         declared_at[name.value] = (f"an {kind}", name)
-        parameters = self._parameters(params, owner)
+        parameters = self._parameters(_tree(params), owner)
+        line, column = _position(name)
         if tree.data == "task_def":
             # hddl.md §3: capabilities, precondition and effect of abstract tasks are ignored.
-            self.tasks[name.value] = AbstractTask(name.value, parameters, name.line, name.column)
+            self.tasks[name.value] = AbstractTask(name.value, parameters, line, column)
             return
         body = _Body("action", name.value, frozenset(p.name for p in parameters))
-        preconditions = self._preconditions(precondition, body)
-        effects, numeric = self._effects(effect, body)
+        preconditions = self._preconditions(_optional_tree(precondition), body)
+        effects, numeric = self._effects(_optional_tree(effect), body)
+        capabilities = _optional_tree(capabilities_node)
         self.actions[name.value] = Action(
             name=name.value,
             parameters=parameters,
-            capabilities=tuple(t.value for t in capabilities.children) if capabilities else (),
+            capabilities=_values(_tokens(capabilities.children)) if capabilities else (),
             preconditions=preconditions,
             effects=effects,
             numeric_effects=numeric,
-            line=name.line,
-            column=name.column,
+            line=line,
+            column=column,
         )
 
     # ---- methods
 
-    def _read_method(self, tree: Tree, method_names: dict[str, Token]) -> Method | None:
-        (name, params, task_call, precondition, effect, network, ordering,
+    def _read_method(self, tree: Tree[Token], method_names: dict[str, Token]) -> Method | None:
+        (name_node, params, task_call, precondition, effect, network, ordering,
          _constraints, _causal_links) = tree.children
+        name = _token(name_node)
         owner = f"method '{name.value}'"
         if name.value in method_names:
             first = method_names[name.value]
@@ -556,11 +488,38 @@ class _DomainReader:
             )
         else:
             method_names[name.value] = name
-        parameters = self._parameters(params.children[0], owner) if params else ()
+        method_params = _optional_tree(params)
+        parameters = self._parameters(_tree(method_params.children[0]), owner) if method_params else ()
         body = _Body("method", name.value, frozenset(p.name for p in parameters))
 
-        task_name, *task_args = task_call.children
+        task_name, *task_args = _tokens(_tree(task_call).children)
         self._check_variables(task_args, body)
+        self._check_decomposed_task(task_name, len(task_args), owner)
+
+        preconditions = self._preconditions(_optional_tree(precondition), body)
+        effects, numeric = self._effects(_optional_tree(effect), body)
+        subtasks, ordered = self._subtasks(_optional_tree(network), body)
+        pairs = self._ordering(_optional_tree(ordering), subtasks, ordered, owner)
+        if ordered:
+            pairs = tuple((a.id, b.id) for a, b in zip(subtasks, subtasks[1:]))
+        line, column = _position(name)
+        return Method(
+            name=name.value,
+            parameters=parameters,
+            task=task_name.value,
+            task_args=_values(task_args),
+            preconditions=preconditions,
+            effects=effects,
+            numeric_effects=numeric,
+            subtasks=subtasks,
+            ordering=pairs,
+            ordered=ordered,
+            line=line,
+            column=column,
+        )
+
+    def _check_decomposed_task(self, task_name: Token, arity: int, owner: str) -> None:
+        """The task a method decomposes must be a declared abstract task of that arity."""
         task = self.tasks.get(task_name.value)
         if task is None:
             what = "an action, not an abstract task" if task_name.value in self.actions else "not declared"
@@ -568,57 +527,35 @@ class _DomainReader:
                 task_name,
                 f"{owner} decomposes unknown abstract task '{task_name.value}' ({what})",
             )
-        elif len(task_args) != len(task.parameters):
+        elif arity != len(task.parameters):
             self._error(
                 task_name,
-                f"{owner} decomposes '{task_name.value}' with {_count(len(task_args), 'argument')} "
+                f"{owner} decomposes '{task_name.value}' with {_count(arity, 'argument')} "
                 f"but the task declares {_count(len(task.parameters), 'parameter')}",
             )
 
-        preconditions = self._preconditions(precondition, body)
-        effects, numeric = self._effects(effect, body)
-        subtasks, ordered = self._subtasks(network, body)
-        pairs = self._ordering(ordering, subtasks, ordered, owner)
-        if ordered:
-            pairs = tuple((a.id, b.id) for a, b in zip(subtasks, subtasks[1:]))
-        return Method(
-            name=name.value,
-            parameters=parameters,
-            task=task_name.value,
-            task_args=tuple(t.value for t in task_args),
-            preconditions=preconditions,
-            effects=effects,
-            numeric_effects=numeric,
-            subtasks=subtasks,
-            ordering=pairs,
-            ordered=ordered,
-            line=name.line,
-            column=name.column,
-        )
-
-    def _subtasks(self, network: Tree | None, body: _Body) -> tuple[tuple[Subtask, ...], bool]:
+    def _subtasks(self, network: Tree[Token] | None, body: _Body) -> tuple[tuple[Subtask, ...], bool]:
         """The task network; an omitted network is an empty *ordered* one (hddl.md §5)."""
         if network is None:
             return (), True
         keyword, defs = network.children
-        ordered = keyword.type in ("K_ORDERED_SUBTASKS", "K_ORDERED_TASKS")
+        ordered = _token(keyword).type in ("K_ORDERED_SUBTASKS", "K_ORDERED_TASKS")
         subtasks: list[Subtask] = []
         ids: set[str] = set()
-        for definition in defs.children:
+        for definition in _trees(_tree(defs).children):
             if definition.data == "subtask_named":
-                id_token, callee, *args = definition.children
+                id_token, callee, *args = _tokens(definition.children)
                 subtask_id = id_token.value
                 if subtask_id in ids:
                     self._error(id_token, f"duplicate subtask id '{subtask_id}' in method '{body.name}'")
             else:
-                id_token = None
-                callee, *args = definition.children
+                callee, *args = _tokens(definition.children)
                 subtask_id = f"__t_id_{self._subtask_counter}"
                 self._subtask_counter += 1
             ids.add(subtask_id)
             self._check_variables(args, body)
             self._check_callee(callee, len(args), body)
-            subtasks.append(Subtask(subtask_id, callee.value, tuple(a.value for a in args)))
+            subtasks.append(Subtask(subtask_id, callee.value, _values(args)))
         return tuple(subtasks), ordered
 
     def _check_callee(self, callee: Token, arity: int, body: _Body) -> None:
@@ -640,12 +577,13 @@ class _DomainReader:
             )
 
     def _ordering(
-        self, ordering: Tree | None, subtasks: tuple[Subtask, ...], ordered: bool, owner: str
+        self, ordering: Tree[Token] | None, subtasks: tuple[Subtask, ...], ordered: bool, owner: str
     ) -> tuple[tuple[str, str], ...]:
         if ordering is None:
             return ()
-        keyword, defs = ordering.children
-        pairs = [tuple(pair.children) for pair in defs.children]
+        keyword_node, defs = ordering.children
+        keyword = _token(keyword_node)
+        pairs = [_tokens(pair.children) for pair in _trees(_tree(defs).children)]
         if ordered and pairs:
             self._error(
                 keyword,
@@ -690,84 +628,108 @@ class _DomainReader:
                 "per declared parameter",
             )
 
-    def _preconditions(self, clause: Tree | None, body: _Body) -> tuple[Condition, ...]:
-        conditions: list[Condition] = []
+    def _preconditions(self, clause: Tree[Token] | None, body: _Body) -> tuple[Precondition, ...]:
+        conditions: list[Precondition] = []
         if clause is not None:
-            self._gd(clause.children[0], body, False, conditions)
+            self._gd(_tree(clause.children[0]), body, False, conditions)
         return tuple(conditions)
 
-    def _gd(self, gd: Tree, body: _Body, negated: bool, out: list[Condition]) -> None:
+    def _gd(self, gd: Tree[Token], body: _Body, negated: bool, out: list[Precondition]) -> None:
+        """Flatten a goal description into ``out``: conjunctions are spliced, negations pushed
+        down to the atoms (each atom is checked against the declarations on the way)."""
         kind = gd.data
         if kind == "empty":
             return
         if kind == "gd_and":
-            if negated and gd.children:
-                self._error(gd, "a negated conjunction (not (and ...)) is not supported by the decomposer")
-                return
-            for child in gd.children:
-                self._gd(child, body, negated, out)
+            self._gd_and(gd, body, negated, out)
         elif kind == "gd_not":
-            self._gd(gd.children[0], body, not negated, out)
+            self._gd(_tree(gd.children[0]), body, not negated, out)
         elif kind == "atom":
-            predicate, *args = gd.children
-            self._check_variables(args, body)
-            if predicate.value not in _ALWAYS_ACCEPTED_IN_PRECONDITIONS:
-                self._check_symbol(predicate, len(args), self.predicates, "predicate", body, "precondition")
-            out.append(Literal(predicate.value, tuple(a.value for a in args), not negated))
+            out.append(self._precondition_atom(gd, body, negated))
         elif kind == "comparison":
-            op, head, number = gd.children
-            function, *args = head.children
-            self._check_variables(args, body)
-            self._check_symbol(function, len(args), self.functions, "function", body, "precondition")
-            value: int | float = float(number.value) if "." in number.value else int(number.value)
-            out.append(Comparison(function.value, tuple(a.value for a in args), op.value, value, negated))
+            out.append(self._comparison(gd, body, negated))
         elif kind == "equality":
             # (= ?x ?y) codesignation constraints are ignored by the decomposer (hddl.md §4.1).
-            self._check_variables(gd.children, body)
+            self._check_variables(_tokens(gd.children), body)
         elif kind == "gd_unsupported":
-            keyword = gd.children[0]
+            keyword = _token(gd.children[0])
             self._error(keyword, f"'{keyword.value}' is not supported by the decomposer")
         else:  # pragma: no cover - the grammar produces no other gd node
             raise AssertionError(kind)
 
+    def _gd_and(self, gd: Tree[Token], body: _Body, negated: bool, out: list[Precondition]) -> None:
+        """A conjunction; under a negation it would be a disjunction, which the decomposer
+        cannot use."""
+        if negated and gd.children:
+            self._error(gd, "a negated conjunction (not (and ...)) is not supported by the decomposer")
+            return
+        for child in _trees(gd.children):
+            self._gd(child, body, negated, out)
+
+    def _precondition_atom(self, atom: Tree[Token], body: _Body, negated: bool) -> Literal:
+        """A boolean atom; ``at`` and ``hascapability`` need no declaration (the original
+        accepts them in preconditions)."""
+        predicate, *args = _tokens(atom.children)
+        self._check_variables(args, body)
+        if predicate.value not in _ALWAYS_ACCEPTED_IN_PRECONDITIONS:
+            self._check_symbol(predicate, len(args), self.predicates, "predicate", body, "precondition")
+        return Literal(predicate.value, _values(args), not negated)
+
+    def _comparison(self, comparison: Tree[Token], body: _Body, negated: bool) -> Comparison:
+        op, head, number = comparison.children
+        function, *args = _tokens(_tree(head).children)
+        self._check_variables(args, body)
+        self._check_symbol(function, len(args), self.functions, "function", body, "precondition")
+        text = _token(number).value
+        value: int | float = float(text) if "." in text else int(text)
+        return Comparison(function.value, _values(args), _token(op).value, value, negated)
+
     def _effects(
-        self, clause: Tree | None, body: _Body
+        self, clause: Tree[Token] | None, body: _Body
     ) -> tuple[tuple[Literal, ...], tuple[NumericEffect, ...]]:
         literals: list[Literal] = []
         numeric: list[NumericEffect] = []
         if clause is not None:
-            self._effect(clause.children[0], body, literals, numeric)
+            self._effect(_tree(clause.children[0]), body, literals, numeric)
         return tuple(literals), tuple(numeric)
 
-    def _effect(self, effect: Tree, body: _Body, literals: list[Literal], numeric: list[NumericEffect]) -> None:
+    def _effect(
+        self, effect: Tree[Token], body: _Body, literals: list[Literal], numeric: list[NumericEffect]
+    ) -> None:
         kind = effect.data
         if kind == "empty":
             return
         if kind == "eff_and":
-            for child in effect.children:
+            for child in _trees(effect.children):
                 self._effect(child, body, literals, numeric)
         elif kind in ("atom", "eff_not"):
-            atom = effect if kind == "atom" else effect.children[0]
-            predicate, *args = atom.children
+            atom = effect if kind == "atom" else _tree(effect.children[0])
+            predicate, *args = _tokens(atom.children)
             self._check_variables(args, body)
             self._check_symbol(predicate, len(args), self.predicates, "predicate", body, "effect")
-            literals.append(Literal(predicate.value, tuple(a.value for a in args), kind == "atom"))
+            literals.append(Literal(predicate.value, _values(args), kind == "atom"))
         elif kind == "numeric_effect":
-            op, head, amount = effect.children
-            function, *args = head.children
-            self._check_variables(args, body)
-            self._check_symbol(function, len(args), self.functions, "function", body, "effect")
-            if isinstance(amount, Tree):
-                self._error(amount, f"the amount of {op.value} must be an integer, found a function term")
-            elif "." in amount.value:
-                # The original parses a decimal amount as a reward object and crashes (hddl.md §4.2).
-                self._error(amount, f"the amount of {op.value} must be an integer, found {amount.value}")
-            else:
-                numeric.append(
-                    NumericEffect(op.value, function.value, tuple(a.value for a in args), int(amount.value))
-                )
+            found = self._numeric_effect(effect, body)
+            if found is not None:
+                numeric.append(found)
         elif kind == "eff_unsupported":
-            keyword = effect.children[0]
+            keyword = _token(effect.children[0])
             self._error(keyword, f"'{keyword.value}' effects are not supported by the decomposer")
         else:  # pragma: no cover - the grammar produces no other effect node
             raise AssertionError(kind)
+
+    def _numeric_effect(self, effect: Tree[Token], body: _Body) -> NumericEffect | None:
+        """``(increase (f a..) N)``; None (problem reported) unless N is an integer literal."""
+        op_node, head, amount = effect.children
+        op = _token(op_node)
+        function, *args = _tokens(_tree(head).children)
+        self._check_variables(args, body)
+        self._check_symbol(function, len(args), self.functions, "function", body, "effect")
+        if isinstance(amount, Tree):
+            self._error(amount, f"the amount of {op.value} must be an integer, found a function term")
+            return None
+        if "." in amount.value:
+            # The original parses a decimal amount as a reward object and crashes (hddl.md §4.2).
+            self._error(amount, f"the amount of {op.value} must be an integer, found {amount.value}")
+            return None
+        return NumericEffect(op.value, function.value, _values(args), int(amount.value))

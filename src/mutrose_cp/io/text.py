@@ -1,6 +1,10 @@
-"""Reading input files: regular files of bounded size, decoded as UTF-8, with located errors."""
+"""Reading input files: regular files of bounded size, decoded as UTF-8, with located errors.
+
+The JSON readers (configuration, goal model, decomposition output) share the problems of a
+document that cannot be decoded at all: a syntax error and a nesting too deep to be read."""
 from __future__ import annotations
 
+import json
 import os
 import stat
 from contextlib import contextmanager
@@ -69,3 +73,64 @@ def decode_utf8(data: bytes, source: str, what: str) -> str:
             f"the {what} is not UTF-8 text: byte 0x{data[exc.start]:02x} cannot be decoded",
             "Save the file as UTF-8.",
         )) from None
+
+
+# ---------------------------------------------------------------------------------------------
+# JSON documents that cannot be decoded
+
+
+def json_syntax_problem(err: json.JSONDecodeError, text: str, source: str) -> Problem:
+    """``file:line:col: invalid JSON: <reason>``, saying so when the text simply stops early."""
+    where = located(source, err.lineno, err.colno)
+    rest = text[err.pos:]
+    truncated = not rest.strip() or (err.msg.startswith("Unterminated string") and '"' not in rest[1:])
+    if truncated:
+        return Problem(
+            where,
+            f"invalid JSON: {err.msg}",
+            "The text ends before the JSON document is complete: the file looks truncated; "
+            "restore its end (every '{' and '[' needs its closing '}' and ']').",
+        )
+    return Problem(where, f"invalid JSON: {err.msg}")
+
+
+def _outside_strings(text: str) -> Iterator[tuple[str, int, int]]:
+    """Every character of ``text`` that is not inside a JSON string, with its line and column:
+    brackets inside strings do not nest anything."""
+    line, column = 1, 1
+    in_string = escaped = False
+    for char in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif char == "\\":
+                escaped = True
+            elif char == '"':
+                in_string = False
+        elif char == '"':
+            in_string = True
+        else:
+            yield char, line, column
+        if char == "\n":
+            line, column = line + 1, 1
+        else:
+            column += 1
+
+
+def json_depth_problem(text: str, source: str) -> Problem:
+    """The JSON nests too deeply to be read (Python's decoder recursed out): located at the
+    first bracket of the deepest nesting."""
+    depth = deepest = 0
+    at = (1, 1)
+    for char, line, column in _outside_strings(text):
+        if char in "[{":
+            depth += 1
+            if depth > deepest:
+                deepest, at = depth, (line, column)
+        elif char in "]}":
+            depth -= 1
+    return Problem(
+        located(source, *at),
+        f"invalid JSON: arrays and objects are nested {deepest} levels deep, too deep to be read",
+        "No mission file nests like this: the file is probably damaged.",
+    )

@@ -16,7 +16,7 @@ if TYPE_CHECKING:  # the types of the stages that produce a vertex's content
     from ..conditions import Test
     from ..expansion import TaskInstance
     from ..htn import DecompositionPath, GroundPredicates
-    from ..query import Binding
+    from .world import Binding
 
 
 class VertexKind(StrEnum):

@@ -18,7 +18,7 @@ from ortools.sat.python import cp_model
 
 from ..constraints import Constraint, ConstraintKind
 from ..expansion import TaskInstance
-from ..io.goal_model import RobotNumber
+from ..model import RobotNumber
 from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex
 from .boolean_model import FALSE, TRUE, BoolModel, Lit
 from .cpsat import CpBuilder, CpLiteral

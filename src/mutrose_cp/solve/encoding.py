@@ -18,11 +18,8 @@ from typing import Iterable
 
 from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
-from ..io.config import Configuration
-from ..io.goal_model import GoalModel
-from ..io.hddl import Comparison, Domain, Literal
+from ..model import Comparison, Configuration, Domain, GoalModel, InitialState, Literal
 from ..model.task_graph import TaskGraph, TaskVertex
-from ..world import InitialState
 from .boolean_model import FALSE, TRUE, BoolModel, Compare, Exactly, Lit, NumericEffectKind, ValueAfter, neg
 from .semantics import (
     AtomKey,

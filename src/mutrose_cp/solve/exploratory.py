@@ -14,11 +14,8 @@ from typing import Callable
 from ..conditions import holds
 from ..constraints import Constraint
 from ..errors import NoDecompositionError, Problem
-from ..io.config import Configuration
-from ..io.goal_model import GoalModel
-from ..io.hddl import Domain, Literal
+from ..model import Configuration, Domain, GoalModel, InitialState, Literal
 from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex
-from ..world import InitialState
 from .semantics import (
     ConstraintIndex,
     EffectScopes,

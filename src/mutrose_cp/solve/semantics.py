@@ -24,12 +24,8 @@ from typing import Iterable, Mapping
 from ..conditions import AllOf, Test, compare, holds, translate
 from ..constraints import EC, SEQ, Constraint
 from ..errors import MissionError
-from ..io.config import Configuration
-from ..io.goal_model import GoalModel
-from ..io.hddl import Domain, Literal
-from ..query import Binding
+from ..model import Binding, Configuration, Domain, GoalModel, InitialState, Literal
 from ..model.task_graph import Decomposition, DecompositionVertex, EdgeKind, OperatorVertex, ScopeVertex, TaskGraph, TaskVertex
-from ..world import InitialState
 
 AtomKey = tuple[str, tuple[str, ...]]
 

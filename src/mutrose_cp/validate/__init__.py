@@ -31,12 +31,20 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 
-from ..io.config import Configuration
 from ..io.decomposition_output import DecompositionOutput, OutputTask
-from ..io.expressions import Annotation, AnnotationLeaf, Atom, BoolOp, Condition
-from ..io.goal_model import GMNode, GoalModel
-from ..io.hddl import Domain, Literal
-from ..world import InitialState
+from ..model import (
+    Annotation,
+    AnnotationLeaf,
+    Atom,
+    BoolOp,
+    Condition,
+    Configuration,
+    Domain,
+    GMNode,
+    GoalModel,
+    InitialState,
+    Literal,
+)
 from .htn_match import Matcher, Step
 
 AtomKey = tuple[str, tuple[str, ...]]

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import Iterator, Sequence
 
 from ..io.decomposition_output import OutputAction
-from ..io.hddl import Comparison, Domain, Literal, Method, NumericEffect
+from ..model import Comparison, Domain, Literal, Method, NumericEffect
 
 MAX_EXPLANATIONS = 16  # enough to find one that replays; they all list the same actions
 

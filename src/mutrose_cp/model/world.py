@@ -1,0 +1,200 @@
+"""The world: the knowledge records, the objects and ground facts derived from them, and the
+values goal-model variables take while the mission is expanded.
+
+* :class:`WorldKnowledge` is produced by :mod:`mutrose_cp.io.knowledge` (the world knowledge
+  file, indexed for the queries);
+* :class:`InitialState` (objects per sort, :class:`GroundLiteral` facts, function values) is
+  built from it by :mod:`mutrose_cp.world` through the configuration's semantic mappings;
+* :class:`Binding` is what the expansion binds a goal-model variable to; the query evaluator
+  :mod:`mutrose_cp.query` and the condition tests read it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+from lxml import etree
+
+from .records import child, element_children, field_text, record_id, text_of
+
+Element = etree._Element
+
+# ---------------------------------------------------------------------------------------------
+# The knowledge
+
+
+@dataclass(frozen=True)
+class WorldKnowledge:
+    """The world knowledge document: its records (the element children of ``root``) and the
+    indexes that let a query run once per ``forAll`` iteration without rescanning them."""
+
+    source: str
+    root: etree._Element  # the xml_root element; its element children are the records
+    unique_id: str = "name"
+    warnings: tuple[str, ...] = ()  # repairs of the XML, located
+
+    # -- records ------------------------------------------------------------------------------
+
+    @cached_property
+    def records(self) -> tuple[etree._Element, ...]:
+        """Top-level records (element children of the root) in document order."""
+        return tuple(element_children(self.root))
+
+    @cached_property
+    def _by_tag(self) -> dict[str, tuple[etree._Element, ...]]:
+        groups: dict[str, list[etree._Element]] = {}
+        for r in self.records:
+            groups.setdefault(r.tag, []).append(r)
+        return {t: tuple(rs) for t, rs in groups.items()}
+
+    def records_of(self, tag: str) -> tuple[etree._Element, ...]:
+        """Top-level records with ``tag`` in document order (same tuple object on every call,
+        so callers may recognise the full candidate list)."""
+        return self._by_tag.get(tag, ())
+
+    @cached_property
+    def _by_tag_id(self) -> dict[tuple[str, str], etree._Element]:
+        index: dict[tuple[str, str], etree._Element] = {}
+        for r in self.records:
+            rid = self.record_id(r)
+            if rid is not None:
+                index.setdefault((r.tag, rid), r)
+        return index
+
+    def find_record(self, tag: str, rid: str) -> etree._Element | None:
+        """First top-level record with ``tag`` and unique id ``rid``."""
+        return self._by_tag_id.get((tag, rid))
+
+    @cached_property
+    def _field_indexes(self) -> dict[tuple[str, str], dict[str, list[int]]]:
+        return {}
+
+    def field_index(self, tag: str, name: str) -> dict[str, list[int]]:
+        """For top-level records of ``tag``: text of field ``name`` -> positions in
+        :meth:`records_of` (ascending).  Built once per (tag, field); lets ``x.b in ...``
+        select among thousands of records without a scan."""
+        key = (tag, name)
+        index = self._field_indexes.get(key)
+        if index is None:
+            index = {}
+            for pos, r in enumerate(self.records_of(tag)):
+                t = field_text(r, name)
+                if t is not None:
+                    index.setdefault(t, []).append(pos)
+            self._field_indexes[key] = index
+        return index
+
+    # -- per-record helpers --------------------------------------------------------------------
+
+    def record_id(self, el: etree._Element) -> str | None:
+        """The record's unique id (its ``unique_id`` field), None if it has none."""
+        return record_id(el, self.unique_id)
+
+    @staticmethod
+    def field(el: etree._Element, name: str) -> etree._Element | None:
+        """The first field ``name`` of a record."""
+        return child(el, name)
+
+    @staticmethod
+    def field_text(el: etree._Element, name: str) -> str | None:
+        """The text of the first field ``name`` of a record; None when it is missing."""
+        return field_text(el, name)
+
+    @staticmethod
+    def text(el: etree._Element) -> str:
+        """The element's text as PropertyTree sees it."""
+        return text_of(el)
+
+
+# ---------------------------------------------------------------------------------------------
+# The initial state
+
+Number = int | float
+
+
+@dataclass(frozen=True)
+class GroundLiteral:
+    """A ground atom with polarity, e.g. ``clean(RoomA)`` or ``not at(CleanLinens, Storage1)``."""
+
+    predicate: str
+    args: tuple[str, ...]
+    positive: bool = True
+
+    def __str__(self) -> str:
+        atom = f"{self.predicate}({', '.join(self.args)})"
+        return atom if self.positive else f"not {atom}"
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """The ground initial state: objects per sort, literals and function values.
+
+    ``literals`` and ``functions`` keep mapping order and duplicates, as the original's vectors
+    do; look-ups use the first matching entry.  Absent atoms are *unknown* (None), which every
+    consumer treats as satisfied (spec §6).
+    """
+
+    sorts: dict[str, frozenset[str]]
+    literals: tuple[GroundLiteral, ...]
+    functions: tuple[tuple[tuple[str, tuple[str, ...]], Number], ...]
+    warnings: tuple[str, ...] = ()  # world values read differently from how they are written
+
+    @cached_property
+    def _literal_index(self) -> dict[tuple[str, tuple[str, ...]], bool]:
+        index: dict[tuple[str, tuple[str, ...]], bool] = {}
+        for lit in self.literals:
+            index.setdefault((lit.predicate, lit.args), lit.positive)
+        return index
+
+    @cached_property
+    def _function_index(self) -> dict[tuple[str, tuple[str, ...]], Number]:
+        index: dict[tuple[str, tuple[str, ...]], Number] = {}
+        for key, value in self.functions:
+            index.setdefault(key, value)
+        return index
+
+    def fact_map(self) -> dict[tuple[str, tuple[str, ...]], bool]:
+        """Every known atom and its polarity (the first literal of an atom decides), a copy to
+        change as effects are applied."""
+        return dict(self._literal_index)
+
+    def value_map(self) -> dict[tuple[str, tuple[str, ...]], Number]:
+        """Every known function value (the first entry decides), a copy to change."""
+        return dict(self._function_index)
+
+    def value_of(self, pred: str, args: tuple[str, ...] | list[str]) -> bool | None:
+        """Polarity of the first literal ``pred(args)``; None when the atom is unknown."""
+        return self._literal_index.get((pred, tuple(args)))
+
+    def function_value(self, fn: str, args: tuple[str, ...] | list[str]) -> Number | None:
+        """Value of the first ``fn(args)`` entry; None when unknown."""
+        return self._function_index.get((fn, tuple(args)))
+
+    def objects_of(self, sort: str) -> frozenset[str]:
+        """Objects of ``sort`` (empty for an unknown sort)."""
+        return self.sorts.get(sort, frozenset())
+
+
+# ---------------------------------------------------------------------------------------------
+# Variable values
+
+
+@dataclass(frozen=True)
+class Binding:
+    """The current value of a GM variable during decomposition.
+
+    ``value`` is a record id (single-valued variable; ``""`` when a query found nothing) or a
+    tuple of ids (collection); ``type`` the OCL type as declared (``Room``,
+    ``Sequence(Room)``); ``records`` the knowledge records behind the value, in order (needed
+    for ``v.attr`` look-ups and path queries)."""
+
+    value: str | tuple[str, ...]
+    type: str
+    records: tuple[Element, ...] = ()
+
+    @property
+    def ids(self) -> tuple[str, ...]:
+        """The record ids held (empty for a query that found nothing)."""
+        if isinstance(self.value, tuple):
+            return self.value
+        return (self.value,) if self.value else ()
