@@ -226,7 +226,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         with phase("writing the output"):
             write_output(model, out_path, file_type)
     elapsed = time.perf_counter() - start
-    kinds = Counter(c.kind for c in constraints)
+    kinds = Counter(str(c.kind) for c in constraints)
     data = {
         "command": "decompose",
         "algorithm": args.algorithm,
@@ -480,20 +480,27 @@ def _main(argv: Sequence[str] | None) -> int:
         import mutrose_cp.solve.cpsat  # noqa: F401
     try:
         with signal_handlers(), input_limit(args.max_input_mb * MB):
-            return args.func(args)
-    except Interrupted as stop:
-        print(f"interrupted{' while ' + stop.during if stop.during else ''} ({stop}): no output was written",
-              file=sys.stderr)
-        return stop.exit_code
-    except MissionError as err:
-        for problem in err.problems:
-            print(f"error: {problem}", file=sys.stderr)
-        if len(err.problems) > 1:
-            print(f"{len(err.problems)} problems found", file=sys.stderr)
-        return err.exit_code
-    except RecursionError:
-        print("error: the mission is nested too deeply to process", file=sys.stderr)
-        return 2
-    except OSError as err:
-        print(f"error: {err.filename or ''}: {err.strerror or err}", file=sys.stderr)
-        return 2
+            status: int = args.func(args)
+            return status
+    except (Interrupted, MissionError, RecursionError, OSError) as err:
+        return _report(err)
+
+
+def _report(err: Interrupted | MissionError | RecursionError | OSError) -> int:
+    """Print why a command stopped (never a traceback) and return its exit status."""
+    match err:
+        case Interrupted(during=during):
+            print(f"interrupted{' while ' + during if during else ''} ({err}): no output was written", file=sys.stderr)
+            return err.exit_code
+        case MissionError(problems=problems):
+            for problem in problems:
+                print(f"error: {problem}", file=sys.stderr)
+            if len(problems) > 1:
+                print(f"{len(problems)} problems found", file=sys.stderr)
+            return err.exit_code
+        case RecursionError():
+            print("error: the mission is nested too deeply to process", file=sys.stderr)
+            return 2
+        case OSError():
+            print(f"error: {err.filename or ''}: {err.strerror or err}", file=sys.stderr)
+            return 2

@@ -39,46 +39,42 @@ class Constraint(NamedTuple):
 _Child = int | list[Constraint]  # a task vertex, or the constraint list of a subtree
 
 
+# Which constraints a parent of each kind links through one end only: a child constraint of a
+# kind in EXIT_ONCE[parent] is left through its second vertex only (else through both), one in
+# ENTER_ONCE[parent] is entered through its first vertex only (else through both).
+_EXIT_ONCE = {SEQ: frozenset({SEQ}), FB: frozenset({FB}), PAR: frozenset()}
+_ENTER_ONCE = {SEQ: frozenset({SEQ, FB}), FB: frozenset({FB}), PAR: frozenset()}
+
+
+def _exits(kind: ConstraintKind, child: int | Constraint) -> tuple[int, ...]:
+    if isinstance(child, int):
+        return (child,)
+    return (child.second,) if child.kind in _EXIT_ONCE[kind] else (child.first, child.second)
+
+
+def _entries(kind: ConstraintKind, child: int | Constraint) -> tuple[int, ...]:
+    if isinstance(child, int):
+        return (child,)
+    return (child.first,) if child.kind in _ENTER_ONCE[kind] else (child.first, child.second)
+
+
 def _pairs(kind: ConstraintKind, x: _Child, y: _Child) -> list[tuple[int, int]]:
-    """Endpoint pairs generated between two children of a SEQ, FB or PAR node (§6.1)."""
-    out: list[tuple[int, int]] = []
-    if isinstance(x, int) and isinstance(y, int):
-        return [(x, y)]
-    if isinstance(x, int):
-        assert isinstance(y, list)
-        for c in y:
-            if kind == SEQ:
-                out += [(x, c.first)] if c.kind in (SEQ, FB) else [(x, c.first), (x, c.second)]
-            elif kind == FB:
-                out += [(x, c.first)] if c.kind == FB else [(x, c.first), (x, c.second)]
-            else:
-                out += [(x, c.first), (x, c.second)]
-        return out
-    if isinstance(y, int):
-        for c in x:
-            if kind == SEQ:
-                out += [(c.second, y)] if c.kind == SEQ else [(c.first, y), (c.second, y)]
-            elif kind == FB:
-                out += [(c.second, y)] if c.kind == FB else [(c.first, y), (c.second, y)]
-            else:
-                out += [(c.first, y), (c.second, y)]
-        return out
-    for l in x:
-        for r in y:
-            four = [(l.first, r.first), (l.first, r.second), (l.second, r.first), (l.second, r.second)]
-            if kind == SEQ:
-                if l.kind == SEQ:
-                    out += [(l.second, r.first)] if r.kind in (SEQ, FB) else [(l.second, r.first), (l.second, r.second)]
-                else:
-                    out += [(l.first, r.first), (l.second, r.first)] if r.kind in (SEQ, FB) else four
-            elif kind == FB:
-                if l.kind in (SEQ, PAR):
-                    out += four if r.kind in (SEQ, PAR) else [(l.first, r.first), (l.second, r.first)]
-                else:
-                    out += [(l.second, r.first), (l.second, r.second)] if r.kind in (SEQ, PAR) else [(l.second, r.first)]
-            else:
-                out += four
-    return out
+    """Endpoint pairs generated between two children of a SEQ, FB or PAR node (§6.1): every way
+    out of each constraint of ``x`` joined to every way into each constraint of ``y`` (a task is
+    its own way in and out)."""
+    left = [x] if isinstance(x, int) else x
+    right = [y] if isinstance(y, int) else y
+    return [(e, n) for l in left for r in right for e in _exits(kind, l) for n in _entries(kind, r)]
+
+
+def _combinations(kind: ConstraintKind, children: int, pairs_needed: bool) -> list[tuple[int, int]]:
+    """Which children are linked: consecutive ones in a sequence or fallback, every pair below a
+    parallel operator (none when no ancestor needs the parallel pairs)."""
+    if kind != PAR:
+        return [(i, i + 1) for i in range(children - 1)]
+    if not pairs_needed:
+        return []
+    return [(i, j) for i in range(children) for j in range(i + 1, children)]
 
 
 def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constraint]:
@@ -97,27 +93,21 @@ def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constra
             children.append(u)
         elif isinstance(ux, OperatorVertex):
             children.append(_tree_constraints(tg, u, pairs_needed or kind != PAR))
-    pairs: list[tuple[int, int]] = []
-    if kind == PAR and not pairs_needed:
-        combos = []
-    elif kind == PAR:
-        combos = [(i, j) for i in range(len(children)) for j in range(i + 1, len(children))]
-    else:
-        combos = [(i, i + 1) for i in range(len(children) - 1)]
-    for i, j in combos:
-        pairs += _pairs(kind, children[i], children[j])
+    own = [Constraint(kind, *p) for i, j in _combinations(kind, len(children), pairs_needed)
+           for p in _pairs(kind, children[i], children[j])]
+    inherited = [k for c in children if isinstance(c, list) for k in c]
+    return _first_per_pair(own + inherited)
+
+
+def _first_per_pair(constraints: list[Constraint]) -> list[Constraint]:
+    """The constraints in order, keeping the first for each (first, second) pair: the node's own
+    links win over those of its subtrees."""
     seen: set[tuple[int, int]] = set()
     out: list[Constraint] = []
-    for p in pairs:
-        if p not in seen:
-            seen.add(p)
-            out.append(Constraint(kind, *p))
-    for c in children:
-        if isinstance(c, list):
-            for k in c:
-                if (k.first, k.second) not in seen:
-                    seen.add((k.first, k.second))
-                    out.append(k)
+    for c in constraints:
+        if (c.first, c.second) not in seen:
+            seen.add((c.first, c.second))
+            out.append(c)
     return out
 
 

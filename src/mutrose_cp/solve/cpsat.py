@@ -87,14 +87,8 @@ class CpBuilder:
         match r:
             case Clause(lits=lits):
                 c = m.add_bool_or([self.lit(l) for l in lits] or [m.new_constant(0)])
-            case Exactly(lits=lits, target=target):
-                choices = [self.lit(l) for l in lits]
-                if target is TRUE:
-                    c = m.add_exactly_one(choices) if enforce is None else m.add(sum(choices) == 1)
-                elif target is FALSE:
-                    c = m.add(sum(choices) == 0)
-                else:
-                    c = m.add(sum(choices) == self.lit(target))
+            case Exactly():
+                c = self._exactly(r, enforced=enforce is not None)
             case AndOf(lits=lits, target=target):
                 parts, t = [self.lit(l) for l in lits], self.var(target)
                 m.add_bool_and(parts).only_enforce_if(t)
@@ -115,6 +109,16 @@ class CpBuilder:
         if enforce is not None and c is not None:
             c.only_enforce_if(enforce)
         return c
+
+    def _exactly(self, r: Exactly, *, enforced: bool) -> cp_model.Constraint:
+        """As many of the choices as ``r.target`` says (an enforced exactly-one is a sum, as
+        CP-SAT's exactly-one constraint cannot be made conditional)."""
+        choices = [self.lit(l) for l in r.lits]
+        if r.target is TRUE:
+            return self.model.add(sum(choices) == 1) if enforced else self.model.add_exactly_one(choices)
+        if r.target is FALSE:
+            return self.model.add(sum(choices) == 0)
+        return self.model.add(sum(choices) == self.lit(r.target))
 
     def _value_after(self, r: ValueAfter) -> cp_model.Constraint:
         m = self.model
