@@ -22,3 +22,11 @@ def test_api_guide_examples_run(monkeypatch, capsys):
     printed = capsys.readouterr().out.splitlines()
     # the solve printed the chosen decompositions and OR choices the text describes
     assert printed[0].startswith("['AT") and "'G7_2': 'G11'" in printed[1]
+    # Mission.decompose: the first two of the eight, the least cost, a sample of three
+    assert printed[2].startswith("8 [['AT1_1|1'") and printed[2].count("[") == 3
+    mission, best, costs = namespace["mission"], namespace["best"], namespace["costs"]
+    per_decomposition = costs.decomposition_costs(mission.task_graph)
+    listed = mission.decompose(namespace["DecompositionRequest"](limit=None)).decompositions
+    every = [sum(per_decomposition[d] for d in ds) for ds in listed]
+    assert printed[3].split(" ", 1)[0] == str(best.optimum[1]) == str(min(every))
+    assert printed[4] == "3"
