@@ -8,23 +8,30 @@ built from it.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
+from enum import StrEnum
 from typing import Iterator, Mapping
 
 from .model import Binding
 
-OPERATOR = "operator"
-MEANSEND = "meansend"
-GOAL = "goal"
-TASK = "task"
+
+class RatKind(StrEnum):
+    OPERATOR = "operator"  # ;, # or FALLBACK of a goal's runtime annotation
+    MEANSEND = "meansend"  # a goal refined by a single child
+    GOAL = "goal"  # a goal leaf: a query goal, which selects but adds no task
+    TASK = "task"  # a task instance leaf
+
+
+OPERATOR, MEANSEND, GOAL, TASK = RatKind.OPERATOR, RatKind.MEANSEND, RatKind.GOAL, RatKind.TASK
 
 
 @dataclass
 class RatNode:
-    kind: str  # OPERATOR | MEANSEND | GOAL | TASK
+    kind: RatKind
     content: str  # ";", "#", "FALLBACK", a goal id, or a task instance id
     related_goal: str | None = None  # the goal this node belongs to; "" for a forAll dummy node
     children: list["RatNode"] = field(default_factory=list)
+    _: KW_ONLY
     group: bool = True
     divisible: bool = True
     or_decomposition: bool = False

@@ -197,14 +197,15 @@ class _Walker:
                 self.progress(i + 1, len(elements))
         if len(copies) == 1:
             return copies[0]
-        return RatNode(OPERATOR, "#", "", copies, True, True, False, self._snapshot(), is_forall_dummy=True)
+        return RatNode(OPERATOR, "#", "", copies, var_maps=self._snapshot(), is_forall_dummy=True)
 
     def _expand(self, node: GMNode, depth: int) -> RatNode:
         """The operator structure of a goal with children, its leaves paired left to right."""
         children = [self.gm.node(c) for c in node.children]
         snapshot = self._snapshot()
         if len(children) == 1:
-            rat = RatNode(MEANSEND, node.id, node.key, [], node.group, node.divisible, node.or_decomposed, snapshot)
+            rat = RatNode(MEANSEND, node.id, node.key, [], group=node.group, divisible=node.divisible,
+                          or_decomposition=node.or_decomposed, var_maps=snapshot)
             rat.children.append(self.walk(children[0], depth + 1))
             return rat
         annotation: AnnotationOp = node.annotation if isinstance(node.annotation, AnnotationOp) else AnnotationOp(
@@ -222,8 +223,8 @@ class _Walker:
                         f"runtime annotation names more children than the goal has ({a.name})", self._where(node)
                     )
                 return self.walk(queue.pop(0), depth + 1)
-            op = RatNode(OPERATOR, a.op, node.key, [], node.group, node.divisible, node.or_decomposed, snapshot,
-                         inner=inner)
+            op = RatNode(OPERATOR, a.op, node.key, [], group=node.group, divisible=node.divisible,
+                         or_decomposition=node.or_decomposed, var_maps=snapshot, inner=inner)
             for c in a.children:
                 op.children.append(build(c, True))
             return op

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Callable, Mapping, Sequence
+from typing import Callable, Mapping, NamedTuple, Sequence
 
 from lxml import etree
 
@@ -152,13 +152,12 @@ class _Query:
         ``in`` before any comparison operator, a bare (possibly negated) boolean field, or a
         comparison."""
         text = atom.text.strip()
-        m_in = _IN.search(text)
-        m_op = _OPERATOR.search(text)
-        if m_in is not None and (m_op is None or m_in.start() < m_op.start()):
-            return self.compile_in(text[: m_in.start()].strip(), text[m_in.end() :].strip())
-        if m_op is None:
+        form = _atom_form(text)
+        if form.membership is not None:
+            return self.compile_in(text[: form.membership.start()].strip(), text[form.membership.end() :].strip())
+        if form.comparison is None:
             return _boolean(text)
-        return self.compile_comparison(text, m_op)
+        return self.compile_comparison(text, form.comparison)
 
     def compile_comparison(self, text: str, m_op: re.Match[str]) -> _Filter:
         """``x.attr op rhs`` with the original's quirks: ``<>`` refused, ``>=``/``<=`` read as
@@ -288,6 +287,23 @@ def _string_equals(attr: str, rhs: str) -> _Filter:
     return _equals(attr, value)
 
 
+class _AtomForm(NamedTuple):
+    """How the original reads a select atom, by string search: an ``in`` before any comparison
+    operator (``membership``), a comparison (``comparison``), or neither: a bare, possibly
+    negated, boolean field."""
+
+    membership: re.Match[str] | None
+    comparison: re.Match[str] | None
+
+
+def _atom_form(text: str) -> _AtomForm:
+    m_in = _IN.search(text)
+    m_op = _OPERATOR.search(text)
+    if m_in is not None and (m_op is None or m_in.start() < m_op.start()):
+        return _AtomForm(m_in, None)
+    return _AtomForm(None, m_op)
+
+
 def _equals(attr: str, value: str) -> _Filter:
     return _Filter(lambda x: field_text(x, attr) == value, (attr, frozenset((value,))))
 
@@ -308,17 +324,17 @@ def select_problems(select: Select) -> list[str]:
                 visit(c)
             return
         text = cond.text.strip()
-        m_in = _IN.search(text)
-        m_op = _OPERATOR.search(text)
-        if m_in is not None and (m_op is None or m_in.start() < m_op.start()):
-            right = text[m_in.end():].strip()
+        form = _atom_form(text)
+        if form.membership is not None:
+            right = text[form.membership.end():].strip()
             if right.split(".", 1)[0] == select.variable and right.count(".") != 1:
                 problems.append(
                     "The in operator for ownership relations currently only accepts a variable "
-                    f"direct attribute ([var].[attr]): write [{text[: m_in.start()].strip()} in "
+                    f"direct attribute ([var].[attr]): write [{text[: form.membership.start()].strip()} in "
                     f"{select.variable}.<attribute>]"
                 )
             return
+        m_op = form.comparison
         if m_op is None:
             return
         op = m_op.group()
