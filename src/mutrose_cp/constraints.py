@@ -143,7 +143,7 @@ def _execution_constraints(tg: TaskGraph) -> list[Constraint]:
     return out
 
 
-def _trim(constraints: list[Constraint]) -> list[Constraint]:
+def _drop_implied(constraints: list[Constraint]) -> list[Constraint]:
     """§6.4: drop SEQ implied through SEQ/FB and FB implied through FB (one pass)."""
     seq_succ: dict[int, set[int]] = {}
     fb_succ: dict[int, set[int]] = {}
@@ -203,6 +203,6 @@ def generate_constraints(tg: TaskGraph) -> list[Constraint]:
         has_cd = any(e.kind == EdgeKind.CD for e in tg.edges())
         out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd))
     out += _execution_constraints(tg)
-    out = _trim(out)
+    out = _drop_implied(out)
     _check_robot_numbers(tg, out)
     return out

@@ -112,53 +112,60 @@ class Edge(NamedTuple):
     divisible: bool = True
 
 
+@dataclass
+class _EdgeIndex:
+    """The edges, indexed the ways the construction rules and the decomposers read them, in
+    insertion order (which the original's traversals depend on).  Plain adjacency lists: large
+    missions have hundreds of thousands of EC edges."""
+
+    successors: dict[int, list[tuple[int, EdgeKind]]] = field(default_factory=dict)  # AND, OR, CD
+    by_kind: dict[tuple[int, EdgeKind], list[int]] = field(default_factory=dict)
+    kind: dict[tuple[int, int], EdgeKind] = field(default_factory=dict)
+    # execution constraints are symmetric and numerous: task -> partners, in the order added
+    ec: dict[int, list[ExecutionPartner]] = field(default_factory=dict)
+    ec_pairs: set[tuple[int, int]] = field(default_factory=set)
+    decompositions: dict[int, list[DecompositionVertex]] = field(default_factory=dict)  # by task
+
+
 class _Adjacency:
-    """The queries that both the builder and the frozen graph answer, over the vertices and
-    the indexes of the edges.  Edges are kept in plain adjacency lists in insertion order, which
-    the original's traversals depend on: large missions have hundreds of thousands of EC edges."""
+    """The queries that both the builder and the frozen graph answer."""
 
     vertices: Sequence[Vertex]
-    _succ: dict[int, list[tuple[int, EdgeKind]]]
-    _by_kind: dict[tuple[int, EdgeKind], list[int]]
-    _edge_kind: dict[tuple[int, int], EdgeKind]
-    # execution constraints are symmetric and numerous: task -> partners, in the order added
-    _ec: dict[int, list[ExecutionPartner]]
-    _ec_pairs: set[tuple[int, int]]
-    _decs: dict[int, list[DecompositionVertex]]
+    _edges: _EdgeIndex
 
     def out(self, v: int, *kinds: EdgeKind) -> list[int]:
         """Successors of ``v`` through edges of the given kinds, in insertion order."""
         if len(kinds) == 1:
-            return self._by_kind.get((v, kinds[0]), [])
-        return [u for u, k in self._succ[v] if k in kinds]
+            return self._edges.by_kind.get((v, kinds[0]), [])
+        return [u for u, k in self._edges.successors[v] if k in kinds]
 
     def children(self, v: int) -> list[int]:
         """AND/OR successors in insertion order (a vertex refines into one kind only)."""
-        ands = self._by_kind.get((v, EdgeKind.AND))
-        ors = self._by_kind.get((v, EdgeKind.OR))
+        ands = self._edges.by_kind.get((v, EdgeKind.AND))
+        ors = self._edges.by_kind.get((v, EdgeKind.OR))
         if ands and ors:
             return self.out(v, EdgeKind.AND, EdgeKind.OR)
         return ands or ors or []
 
     def successors(self, v: int) -> list[tuple[int, EdgeKind]]:
         """AND, OR and CD successors of ``v`` with the edge kind, in insertion order."""
-        return self._succ[v]
+        return self._edges.successors[v]
 
     def is_or(self, v: int) -> bool:
-        return any(k == EdgeKind.OR for _, k in self._succ[v])
+        return any(k == EdgeKind.OR for _, k in self._edges.successors[v])
 
     def edge_kind(self, a: int, b: int) -> EdgeKind:
-        return self._edge_kind[(a, b)]
+        return self._edges.kind[(a, b)]
 
     def has_edge(self, a: int, b: int) -> bool:
-        return (a, b) in self._edge_kind or (a, b) in self._ec_pairs
+        return (a, b) in self._edges.kind or (a, b) in self._edges.ec_pairs
 
     def ec_partners(self, v: int) -> list[ExecutionPartner]:
         """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
-        return self._ec.get(v, [])
+        return self._edges.ec.get(v, [])
 
     def decompositions_of(self, task: int) -> list[DecompositionVertex]:
-        return self._decs.get(task, [])
+        return self._edges.decompositions.get(task, [])
 
     def decompositions(self) -> list[DecompositionVertex]:
         return [v for v in self.vertices if isinstance(v, DecompositionVertex)]
@@ -191,12 +198,7 @@ class TaskGraph(_Adjacency):
     once built; the decomposers, the constraints and the outputs only read it."""
 
     vertices: tuple[Vertex, ...]
-    _succ: dict[int, list[tuple[int, EdgeKind]]]
-    _by_kind: dict[tuple[int, EdgeKind], list[int]]
-    _edge_kind: dict[tuple[int, int], EdgeKind]
-    _ec: dict[int, list[ExecutionPartner]]
-    _ec_pairs: set[tuple[int, int]]
-    _decs: dict[int, list[DecompositionVertex]]
+    _edges: _EdgeIndex
     unique_branch: bool = False
     # achieve goals that trimming removed (means-end goals, single-child chains above the root),
     # by the kept vertex that now stands for their subtree: their conditions are checked there
@@ -205,25 +207,21 @@ class TaskGraph(_Adjacency):
     def edges(self) -> Iterator[Edge]:
         """All edges (EC ones in both directions), by source vertex and then insertion order."""
         for a in range(len(self.vertices)):
-            for b, kind in self._succ[a]:
+            for b, kind in self._edges.successors[a]:
                 yield Edge(a, b, kind)
-            for p in self._ec.get(a, ()):
+            for p in self._edges.ec.get(a, ()):
                 yield Edge(a, p.task, EdgeKind.EC, p.group, p.divisible)
 
 class TaskGraphBuilder(_Adjacency):
     """A Task Graph under construction: vertices are added in index order, edges in the order
-    the construction rules (§5.1–§5.5) meet them; :meth:`freeze` hands out the result."""
+    the construction rules (§5.1–§5.5) meet them; :meth:`freeze` hands out the result, after
+    which the builder is dropped (the graph takes over its edge index)."""
 
     vertices: list[Vertex]
 
     def __init__(self) -> None:
         self.vertices = []
-        self._succ = {}
-        self._by_kind = {}
-        self._edge_kind = {}
-        self._ec = {}
-        self._ec_pairs = set()
-        self._decs = {}
+        self._edges = _EdgeIndex()
         self.achieve_carried: dict[int, list[ScopeVertex]] = {}
 
     @property
@@ -234,43 +232,42 @@ class TaskGraphBuilder(_Adjacency):
         """Append ``vertex``, whose index must be :attr:`next_index`."""
         assert vertex.index == len(self.vertices), (vertex.index, len(self.vertices))
         self.vertices.append(vertex)
-        self._succ[vertex.index] = []
+        self._edges.successors[vertex.index] = []
         if isinstance(vertex, DecompositionVertex):
-            self._decs.setdefault(vertex.parent, []).append(vertex)
+            self._edges.decompositions.setdefault(vertex.parent, []).append(vertex)
         return vertex
 
     def replace(self, vertex: DecompositionVertex) -> None:
         """Put a changed decomposition vertex in place of the one with its index."""
         old = self.decomposition(vertex.index)
-        siblings = self._decs[old.parent]
+        siblings = self._edges.decompositions[old.parent]
         siblings[siblings.index(old)] = vertex
         self.vertices[vertex.index] = vertex
 
     def add_edge(self, a: int, b: int, kind: EdgeKind) -> None:
         """An AND, OR or CD edge; adding an existing edge again changes its kind in place."""
-        old = self._edge_kind.get((a, b))
+        old = self._edges.kind.get((a, b))
         if old is None:
-            self._succ[a].append((b, kind))
-            self._by_kind.setdefault((a, kind), []).append(b)
+            self._edges.successors[a].append((b, kind))
+            self._edges.by_kind.setdefault((a, kind), []).append(b)
         elif old != kind:
-            self._succ[a] = [(u, kind if u == b else k) for u, k in self._succ[a]]
-            self._by_kind[(a, old)].remove(b)
-            self._by_kind.setdefault((a, kind), []).append(b)
-        self._edge_kind[(a, b)] = kind
+            self._edges.successors[a] = [(u, kind if u == b else k) for u, k in self._edges.successors[a]]
+            self._edges.by_kind[(a, old)].remove(b)
+            self._edges.by_kind.setdefault((a, kind), []).append(b)
+        self._edges.kind[(a, b)] = kind
 
     def add_ec(self, a: int, b: int, group: bool, divisible: bool) -> None:
         """An execution constraint between task vertices ``a`` and ``b`` (both directions)."""
-        self._ec.setdefault(a, []).append(ExecutionPartner(b, group, divisible))
-        self._ec.setdefault(b, []).append(ExecutionPartner(a, group, divisible))
-        self._ec_pairs.add((a, b))
-        self._ec_pairs.add((b, a))
+        self._edges.ec.setdefault(a, []).append(ExecutionPartner(b, group, divisible))
+        self._edges.ec.setdefault(b, []).append(ExecutionPartner(a, group, divisible))
+        self._edges.ec_pairs.add((a, b))
+        self._edges.ec_pairs.add((b, a))
 
     def add_ec_direction(self, a: int, partner: ExecutionPartner) -> None:
         """One direction of an execution constraint (trimming keeps each direction's order)."""
-        self._ec.setdefault(a, []).append(partner)
-        self._ec_pairs.add((a, partner.task))
+        self._edges.ec.setdefault(a, []).append(partner)
+        self._edges.ec_pairs.add((a, partner.task))
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
-        return TaskGraph(tuple(self.vertices), self._succ, self._by_kind, self._edge_kind, self._ec, self._ec_pairs,
-                         self._decs, unique_branch=unique_branch,
+        return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})

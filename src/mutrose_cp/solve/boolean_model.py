@@ -76,10 +76,9 @@ class Exactly:
 
 
 @dataclass(frozen=True, slots=True)
-class AndOf:
-    """``target`` <=> AND of ``lits`` (an auxiliary variable defined by an equivalence)."""
+class _Definition:
+    """An auxiliary variable ``target`` defined by an equivalence over ``lits``."""
 
-    kind: ClassVar[RecordKind] = RecordKind.AND
     lits: tuple[Lit, ...]
     target: int
     label: str = ""
@@ -89,16 +88,17 @@ class AndOf:
 
 
 @dataclass(frozen=True, slots=True)
-class OrOf:
+class AndOf(_Definition):
+    """``target`` <=> AND of ``lits``."""
+
+    kind: ClassVar[RecordKind] = RecordKind.AND
+
+
+@dataclass(frozen=True, slots=True)
+class OrOf(_Definition):
     """``target`` <=> OR of ``lits``."""
 
     kind: ClassVar[RecordKind] = RecordKind.OR
-    lits: tuple[Lit, ...]
-    target: int
-    label: str = ""
-
-    def variables(self) -> list[int]:
-        return _ids(self.lits) + [self.target]
 
 
 @dataclass(frozen=True, slots=True)
