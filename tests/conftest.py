@@ -2,11 +2,15 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
+
+# the tests (and the commands they run) keep the parser cache in a folder of their own
+os.environ.setdefault("XDG_CACHE_HOME", tempfile.mkdtemp(prefix="mutrose-cp-test-cache-"))
 REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", ROOT.parent / "shared" / "reference"))
 if not REFERENCE.is_absolute():
     REFERENCE = (ROOT / REFERENCE).resolve()

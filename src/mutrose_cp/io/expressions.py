@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import re
 from functools import lru_cache
-from importlib import resources
 from typing import Callable, Iterable, cast
 
 from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from ..errors import MissionError
+from .grammar import grammar_text
 from ..model.expressions import (
     Annotation,
     AnnotationLeaf,
@@ -36,10 +36,6 @@ from ..model.expressions import (
 # memoised: the same few expressions are parsed once per goal-model instance, i.e. thousands of
 # times for large worlds, and every result is an immutable value.
 
-
-def _grammar(name: str) -> str:
-    """Read a grammar shipped as package data (``mutrose_cp/grammars/<name>``)."""
-    return resources.files("mutrose_cp").joinpath("grammars", name).read_text(encoding="utf-8")
 
 
 def _merge_annotation(op: str, operands: Iterable[Annotation]) -> AnnotationOp:
@@ -135,24 +131,14 @@ class _ConditionBuilder(Transformer[Token, Condition | None]):
 def _annotation_parser() -> Lark:
     # lexer="basic" (not the contextual lexer) so that FALLBACK is always the keyword, even
     # among description words, exactly like the original flex lexer.
-    return Lark(
-        _grammar("annotation.lark"),
-        parser="lalr",
-        lexer="basic",
-        transformer=_AnnotationBuilder(),
-        maybe_placeholders=True,
-    )
+    return Lark(grammar_text("annotation.lark"), parser="lalr", lexer="basic", transformer=_AnnotationBuilder(),
+                maybe_placeholders=True)
 
 
 @lru_cache(maxsize=None)
 def _condition_parser() -> Lark:
-    return Lark(
-        _grammar("condition.lark"),
-        parser="lalr",
-        lexer="basic",
-        transformer=_ConditionBuilder(),
-        maybe_placeholders=True,
-    )
+    return Lark(grammar_text("condition.lark"), parser="lalr", lexer="basic", transformer=_ConditionBuilder(),
+                maybe_placeholders=True)
 
 
 # ---------------------------------------------------------------------------------------------
