@@ -25,8 +25,7 @@ See ``docs/api.md`` and ``examples/allocation.py`` (robot allocation and schedul
 from __future__ import annotations
 
 from .mission import Mission, find_mission_files
-from .solve.cpsat import CpLiteral
-from .solve.embedding import ConstraintInfo, DecompositionInfo, DecompositionModel
+from .solve.embedding import ConstraintInfo, CpLiteral, DecompositionInfo, DecompositionModel
 
 __all__ = ["Mission", "DecompositionModel", "DecompositionInfo", "ConstraintInfo", "CpLiteral",
            "find_mission_files"]

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable, Iterator, Sequence
 
-from ortools.sat.python import cp_model, cp_model_helper
+from ortools.sat.python import cp_model_helper as cmh
 
 from ..errors import MissionError
 from .boolean_model import (
@@ -30,108 +30,20 @@ from .boolean_model import (
     Compare,
     Exactly,
     Lit,
-    NumericEffectKind,
     OrOf,
     Record,
     ValueAfter,
 )
 from .encoding import Encoding
 
-#: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation
-#: (``IntVar`` and ``NotBooleanVariable`` share this base class).
-CpLiteral = cp_model_helper.Literal
-from .run import run_solver
+from .proto import ProtoBuilder
+from .run import FEASIBLE, INFEASIBLE, OPTIMAL, run_solver
 
 ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
 
 
 # ---------------------------------------------------------------------------------------------
 # Posting records to CP-SAT
-
-
-def _comparison(op: str, bound: int) -> cp_model.Domain:
-    """The values that satisfy ``value op bound`` (the values that do not: its complement)."""
-    low, high = cp_model.INT_MIN, cp_model.INT_MAX
-    intervals = {"=": [[bound, bound]], "<>": [[low, bound - 1], [bound + 1, high]], ">": [[bound + 1, high]],
-                 "<": [[low, bound - 1]], ">=": [[bound, high]], "<=": [[low, bound]]}[op]
-    return cp_model.Domain.from_intervals(intervals)
-
-
-class CpBuilder:
-    """Posts records (:mod:`.boolean_model`) to a ``CpModel`` (the whole model or one component)."""
-
-    def __init__(self, bm: BoolModel, model: cp_model.CpModel | None = None) -> None:
-        self.bm = bm
-        self.model = model or cp_model.CpModel()
-        self.vars: dict[int, cp_model.IntVar] = {}
-
-    def var(self, v: int) -> cp_model.IntVar:
-        if v not in self.vars:
-            iv = self.bm.ints.get(v)
-            if iv is not None:
-                self.vars[v] = self.model.new_int_var(iv.lo, iv.hi, self.bm.names[v])
-            else:
-                self.vars[v] = self.model.new_bool_var(self.bm.names[v])
-        return self.vars[v]
-
-    def lit(self, l: Lit) -> CpLiteral:
-        if isinstance(l, Const):
-            return self.model.new_constant(1 if l is TRUE else 0)
-        return self.var(l) if l > 0 else self.var(-l).negated()
-
-    def post(self, r: Record, enforce: CpLiteral | None = None) -> cp_model.Constraint | None:
-        """Post ``r``; with ``enforce``, the record's defining constraint holds only when
-        ``enforce`` is true (how :func:`explain` names the records of a conflict)."""
-        m = self.model
-        c: cp_model.Constraint | None
-        match r:
-            case Clause(lits=lits):
-                c = m.add_bool_or([self.lit(l) for l in lits] or [m.new_constant(0)])
-            case Exactly():
-                c = self._exactly(r, enforced=enforce is not None)
-            case AndOf(lits=lits, target=target):
-                parts, t = [self.lit(l) for l in lits], self.var(target)
-                m.add_bool_and(parts).only_enforce_if(t)
-                c = m.add_bool_or([x.negated() for x in parts] + [t])
-            case OrOf(lits=lits, target=target):
-                parts, t = [self.lit(l) for l in lits], self.var(target)
-                m.add_bool_or(parts).only_enforce_if(t)
-                for x in parts:
-                    m.add_implication(x, t)
-                c = None
-            case ValueAfter():
-                c = self._value_after(r)
-            case Compare(holds=holds, value=value, op=op, bound=bound):
-                sat, satisfying = self.lit(holds), _comparison(op, bound)
-                m.add_linear_expression_in_domain(self.var(value), satisfying).only_enforce_if(sat)
-                c = m.add_linear_expression_in_domain(self.var(value), satisfying.complement())
-                c.only_enforce_if(sat.negated())
-        if enforce is not None and c is not None:
-            c.only_enforce_if(enforce)
-        return c
-
-    def _exactly(self, r: Exactly, *, enforced: bool) -> cp_model.Constraint:
-        """As many of the choices as ``r.target`` says (an enforced exactly-one is a sum, as
-        CP-SAT's exactly-one constraint cannot be made conditional)."""
-        choices = [self.lit(l) for l in r.lits]
-        if r.target is TRUE:
-            return self.model.add(sum(choices) == 1) if enforced else self.model.add_exactly_one(choices)
-        if r.target is FALSE:
-            return self.model.add(sum(choices) == 0)
-        return self.model.add(sum(choices) == self.lit(r.target))
-
-    def _value_after(self, r: ValueAfter) -> cp_model.Constraint:
-        m = self.model
-        target = self.var(r.target)
-        before = self.var(r.previous) if r.previous is not None else r.previous_value
-        written, known = self.lit(r.writer), self.lit(r.known)
-        if r.effect == NumericEffectKind.ASSIGN:
-            m.add(target == r.amount).only_enforce_if(written)
-        else:
-            # adding to an unknown value starts from the amount itself
-            m.add(target == before + r.amount).only_enforce_if([written, known])
-            m.add(target == r.amount).only_enforce_if([written, known.negated()])
-        return m.add(target == before).only_enforce_if(written.negated())
 
 
 # ---------------------------------------------------------------------------------------------
@@ -180,23 +92,27 @@ def _components(enc: Encoding) -> list[Component]:
     return constant + [groups[k] for k in sorted(groups)]
 
 
-class _Collector(cp_model.CpSolverSolutionCallback):
-    def __init__(self, variables: list[cp_model.IntVar], ids: list[int], keep: bool) -> None:
+class _Collector(cmh.SolutionCallback):
+    """Counts the solutions of an enumeration and keeps the chosen decomposition literals of
+    each, up to ``ENUMERATION_CAP`` (beyond it the component is counted only)."""
+
+    def __init__(self, variables: list[int], ids: list[int], keep: bool) -> None:
         super().__init__()
-        self.variables = variables
+        self.variables = variables  # proto indices
         self.ids = ids
         self.keep = keep
         self.solutions: list[frozenset[int]] = []
         self.count = 0
 
-    def on_solution_callback(self) -> None:
+    def OnSolutionCallback(self) -> None:  # noqa: N802 - the helper module's callback name
         self.count += 1
         if self.keep:
             if self.count > ENUMERATION_CAP:
                 self.keep = False
                 self.solutions = []
                 return
-            self.solutions.append(frozenset(i for v, i in zip(self.variables, self.ids) if self.BooleanValue(v)))
+            self.solutions.append(frozenset(i for v, i in zip(self.variables, self.ids)
+                                            if self.SolutionBooleanValue(v)))
 
 
 def _simple_choice(comp: Component) -> list[frozenset[int]] | None:
@@ -231,13 +147,13 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
         chosen = sorted((s & frozenset(comp.choice_vars) for s in simple), key=sorted)
         comp.solutions, comp.count = chosen, len(chosen)
         return
-    builder = CpBuilder(bm)
+    builder = ProtoBuilder(bm)
     for r in comp.records:
         builder.post(r)
     variables = [builder.var(v) for v in comp.choice_vars]
     collector = _Collector(variables, comp.choice_vars, keep)
     # an enumeration is complete only with OPTIMAL (every solution seen) or INFEASIBLE (none)
-    run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.INFEASIBLE), callback=collector,
+    run_solver(builder.proto, accept=(OPTIMAL, INFEASIBLE), callback=collector,
                enumerate_all=True, what="enumerating a component")
     comp.count = collector.count
     # a canonical order (by decomposition literal), independent of the solver's search
@@ -427,20 +343,19 @@ def explain(enc: Encoding) -> list[str]:
     """Why no decomposition exists: a conflicting set of labelled constraints (CP-SAT assumptions)."""
     reasons: list[str] = []
     for comp in _components(enc):
-        builder = CpBuilder(enc.model)
-        assumptions = {}
+        builder = ProtoBuilder(enc.model)
+        assumptions: dict[int, str] = {}
         for r in comp.records:
             if r.label:
-                a = builder.model.new_bool_var(f"assume:{r.label}")
+                a = builder.new_bool(f"assume:{r.label}")
                 builder.post(r, enforce=a)
-                assumptions[a.Index()] = r.label
+                assumptions[a] = r.label
             else:
                 builder.post(r)
-        builder.model.add_assumptions([builder.model.get_bool_var_from_proto_index(i) for i in assumptions])
-        solver, status = run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.FEASIBLE, cp_model.INFEASIBLE),
-                                    what="explaining a component")
-        if status == cp_model.INFEASIBLE:
-            core = solver.sufficient_assumptions_for_infeasibility()
+        builder.proto.assumptions.extend(list(assumptions))
+        response = run_solver(builder.proto, accept=(OPTIMAL, FEASIBLE, INFEASIBLE), what="explaining a component")
+        if response.status == INFEASIBLE:
+            core = response.sufficient_assumptions_for_infeasibility
             labels = sorted({assumptions[i] for i in core if i in assumptions})
             reasons.extend(enc.labels.get(l, l) for l in labels)
             if not labels:

@@ -15,14 +15,19 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, NamedTuple
 
 from ortools.sat.python import cp_model
+from ortools.sat.python import cp_model_helper as cmh
 
 from ..constraints import Constraint, ConstraintKind
 from ..expansion import TaskInstance
 from ..model import RobotNumber
 from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex
-from .boolean_model import FALSE, TRUE, BoolModel, Lit
-from .cpsat import CpBuilder, CpLiteral
+from .boolean_model import FALSE, TRUE, Lit
 from .encoding import Encoding
+from .proto import ProtoBuilder, negated
+
+#: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation
+#: (``IntVar`` and ``NotBooleanVariable`` share this base class).
+CpLiteral = cmh.Literal
 
 if TYPE_CHECKING:
     from ..mission import Mission
@@ -55,25 +60,14 @@ class DecompositionInfo:
     robot_number: RobotNumber  # fixed n (min == max, fixed) or a range [min, max]
 
 
-class _SharedConstBuilder(CpBuilder):
-    """A :class:`CpBuilder` whose constant literals are two shared CP-SAT constants.
+def _cp_literal(model: cp_model.CpModel, ref: int) -> CpLiteral:
+    """The ``CpModel`` literal of proto literal ``ref`` (``-index - 1`` is a negation).
 
-    The encoder folds known facts into the constants ``TRUE``/``FALSE``; the plain builder
-    creates a fresh ``NewConstant`` at every use.  Here every occurrence (in posted records and
-    in the public maps) is the same object, a real CP-SAT constant that behaves like any other
-    literal (``Not()``, ``OnlyEnforceIf``, ``BooleanValue``)."""
-
-    def __init__(self, bm: BoolModel, model: cp_model.CpModel) -> None:
-        super().__init__(bm, model)
-        self.true = model.new_constant(1)
-        self.false = model.new_constant(0)
-
-    def lit(self, l: Lit) -> CpLiteral:
-        if l is TRUE:
-            return self.true
-        if l is FALSE:
-            return self.false
-        return super().lit(l)
+    Constants are proto variables too (one per value), so every literal of the maps, constant
+    or not, behaves alike: ``Not()``, ``OnlyEnforceIf``, ``BooleanValue``."""
+    if ref >= 0:
+        return model.get_bool_var_from_proto_index(ref)
+    return model.get_bool_var_from_proto_index(negated(ref)).negated()
 
 
 @dataclass
@@ -118,7 +112,7 @@ class DecompositionModel:
     mission: Mission = field(repr=False)
     #: the solver-neutral boolean model the CP-SAT model was built from (for relaxations)
     encoding: Encoding = field(repr=False)
-    builder: CpBuilder = field(repr=False)
+    builder: ProtoBuilder = field(repr=False)
 
     # ------------------------------------------------------------------------------------------
     @classmethod
@@ -128,16 +122,25 @@ class DecompositionModel:
         tg = mission.task_graph
         enc = mission.encoding()
         model = model if model is not None else cp_model.CpModel()
-        builder = _SharedConstBuilder(enc.model, model)
+        builder = ProtoBuilder(enc.model, model.proto)
         for r in enc.model.records:
             builder.post(r)
+
+        made: dict[int, CpLiteral] = {}  # one object per literal: `dm.task[t] is dm.true` for constants
+
+        def lit(l: Lit) -> CpLiteral:
+            ref = builder.lit(l)
+            if ref not in made:
+                made[ref] = _cp_literal(model, ref)
+            return made[ref]
+
         decomposition: dict[str, CpLiteral] = {}
         info: dict[str, DecompositionInfo] = {}
         for v in tg.decompositions():
             dec = v.decomposition
             assert dec is not None
             # a decomposition the encoder never reached cannot be chosen
-            decomposition[dec.id] = builder.lit(enc.decomposition_lit.get(v.index, FALSE))
+            decomposition[dec.id] = lit(enc.decomposition_lit.get(v.index, FALSE))
             acts = dec.path.actions
             info[dec.id] = DecompositionInfo(
                 id=dec.id,
@@ -150,10 +153,10 @@ class DecompositionModel:
             )
         task: dict[str, CpLiteral] = {}
         for t in tg.tasks():
-            task[t.content] = builder.lit(enc.task_lit.get(t.index, FALSE))
-        or_choice = {key: builder.lit(enc.or_choice_lit[vc]) for vc, key in _or_keys(mission, tg, enc).items()}
+            task[t.content] = lit(enc.task_lit.get(t.index, FALSE))
+        or_choice = {key: lit(enc.or_choice_lit[vc]) for vc, key in _or_keys(mission, tg, enc).items()}
         constraints = [_constraint_info(tg, c) for c in mission.constraints]
-        return cls(model, decomposition, task, or_choice, constraints, info, builder.true, builder.false,
+        return cls(model, decomposition, task, or_choice, constraints, info, lit(TRUE), lit(FALSE),
                    mission, enc, builder)
 
     # ------------------------------------------------------------------------------------------

@@ -17,7 +17,7 @@ from ..htn import TreeNode
 from ..io.text import decode_utf8, read_bytes
 from ..model.task_graph import TaskGraph
 
-if TYPE_CHECKING:  # OR-Tools is loaded when a component has to be solved
+if TYPE_CHECKING:  # the CP-SAT layer is loaded when a component has to be solved
     from .cpsat import Component, DecompositionSpace
 
 MAX_COST = 10**12  # per action or method: sums over large missions stay far inside 64 bits
@@ -89,23 +89,22 @@ def least_cost(space: DecompositionSpace, costs: Mapping[int, int]) -> tuple[lis
 
 def _cheapest(space: DecompositionSpace, component: Component, costs: Mapping[int, int]) -> list[int]:
     """The decomposition vertices of ``component``'s cheapest solution."""
-    from ortools.sat.python import cp_model
-
-    from .cpsat import CpBuilder
-    from .run import run_solver
+    from .proto import ProtoBuilder
+    from .run import INFEASIBLE, OPTIMAL, run_solver
 
     var_to_dec = space.var_to_dec
     if component.solutions is not None:
         best = min(component.solutions,
                    key=lambda s: (sum(costs.get(var_to_dec[v], 0) for v in s), sorted(s)))
         return [var_to_dec[v] for v in best]
-    builder = CpBuilder(space.encoding.model)
+    builder = ProtoBuilder(space.encoding.model)
     for r in component.records:
         builder.post(r)
-    builder.model.minimize(sum(costs.get(var_to_dec[v], 0) * builder.var(v) for v in component.choice_vars))
-    solver, status = run_solver(builder.model, accept=(cp_model.OPTIMAL, cp_model.INFEASIBLE),
-                                what="optimising a component")
-    if status == cp_model.INFEASIBLE:  # pragma: no cover - a counted component has solutions
+    for v in component.choice_vars:
+        builder.proto.objective.vars.append(builder.var(v))
+        builder.proto.objective.coeffs.append(costs.get(var_to_dec[v], 0))
+    response = run_solver(builder.proto, accept=(OPTIMAL, INFEASIBLE), what="optimising a component")
+    if response.status == INFEASIBLE:  # pragma: no cover - a counted component has solutions
         raise NoDecompositionError("no valid mission decomposition exists")
-    return [var_to_dec[v] for v in component.choice_vars if solver.BooleanValue(builder.var(v))]
+    return [var_to_dec[v] for v in component.choice_vars if response.solution[builder.var(v)]]
 

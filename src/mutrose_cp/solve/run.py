@@ -15,9 +15,12 @@ import signal
 import threading
 from typing import Iterable
 
-from ortools.sat.python import cp_model
+from ortools.sat.python import cp_model_helper as cmh
 
 from ..errors import MissionError
+
+Status = cmh.CpSolverStatus
+OPTIMAL, FEASIBLE, INFEASIBLE = Status.OPTIMAL, Status.FEASIBLE, Status.INFEASIBLE
 
 
 class IncompleteSolveError(MissionError):
@@ -26,49 +29,59 @@ class IncompleteSolveError(MissionError):
     exit_code = 4
 
 
-def _stop(solver: cp_model.CpSolver, worker: threading.Thread) -> None:
+def _stop(solver: cmh.SolveWrapper, done: threading.Event) -> None:
     """Stop the search and wait for the worker, with further signals held back meanwhile: a
     solver thread still running when the interpreter exits aborts the process.  The stop is
-    repeated until the worker ends, in case the search had not started when it was first asked."""
+    repeated until the worker ends, in case the search had not started when it was first asked.
+    (The worker says when it is done: ``Thread.is_alive`` can turn false while CP-SAT still
+    runs in it, once a solution callback has run on that thread.)"""
     held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
-        while worker.is_alive():
+        while not done.is_set():
             solver.stop_search()
-            worker.join(0.05)
+            done.wait(0.05)
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
-def run_solver(model: cp_model.CpModel, *, accept: Iterable[cp_model.CpSolverStatus],
-               callback: cp_model.CpSolverSolutionCallback | None = None,
-               enumerate_all: bool = False, what: str = "a component") -> tuple[cp_model.CpSolver, cp_model.CpSolverStatus]:
-    """Solve ``model`` with one worker; returns the solver and a status from ``accept``."""
-    solver = cp_model.CpSolver()
-    solver.parameters.num_workers = 1
-    solver.parameters.catch_sigint_signal = False
+def run_solver(model: cmh.CpModelProto, *, accept: Iterable[Status],
+               callback: cmh.SolutionCallback | None = None,
+               enumerate_all: bool = False, what: str = "a component") -> cmh.CpSolverResponse:
+    """Solve ``model`` with one worker; returns the response, whose status is one of ``accept``."""
+    parameters = cmh.SatParameters()
+    parameters.num_workers = 1
+    parameters.catch_sigint_signal = False
     if enumerate_all:
-        solver.parameters.enumerate_all_solutions = True
-    statuses: list[cp_model.CpSolverStatus] = []
+        parameters.enumerate_all_solutions = True
+    solver = cmh.SolveWrapper()
+    solver.set_parameters(parameters)
+    if callback is not None:
+        solver.add_solution_callback(callback)
+    responses: list[cmh.CpSolverResponse] = []
     errors: list[BaseException] = []
+    done = threading.Event()
 
     def work() -> None:
         try:
-            statuses.append(solver.solve(model, callback) if callback is not None else solver.solve(model))
+            responses.append(solver.solve(model))
         except BaseException as exc:  # noqa: BLE001 - handed to the main thread
             errors.append(exc)
+        finally:
+            done.set()
 
     worker = threading.Thread(target=work, name="cp-sat", daemon=True)
     try:
         worker.start()
-        while worker.is_alive():
-            worker.join(0.05)
+        while not done.wait(0.05):
+            pass
     except BaseException:
-        _stop(solver, worker)
+        _stop(solver, done)
         raise
+    worker.join()
     if errors:
         raise errors[0]
-    status = statuses[0]
-    if status not in set(accept):
-        raise IncompleteSolveError(f"CP-SAT did not finish {what} ({solver.status_name(status)}): no result is "
+    response = responses[0]
+    if response.status not in set(accept):
+        raise IncompleteSolveError(f"CP-SAT did not finish {what} ({response.status.name}): no result is "
                                    "reported from an unfinished search")
-    return solver, status
+    return response
