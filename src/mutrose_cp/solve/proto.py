@@ -96,7 +96,7 @@ class ProtoBuilder:
 
     # --- constraints -----------------------------------------------------------------------------
     def _constraint(self, enforcement: Sequence[int] = ()) -> cmh.ConstraintProto:
-        c = self.proto.constraints.add()
+        c: cmh.ConstraintProto = self.proto.constraints.add()  # untyped in OR-Tools' stubs
         c.enforcement_literal.extend(enforcement)
         return c
 
