@@ -182,6 +182,35 @@ def run_dissertation(family: str, repeats: int, timeout: float, log, quick: bool
     return rows
 
 
+def run_small_missions(repeats: int, timeout: float, log) -> list[dict]:
+    """Every reference mission and configuration as a user runs it, whole process (start-up
+    included), with both algorithms; and the floor: ``python -c pass``."""
+    floor = [measure([sys.executable, "-c", "pass"], ROOT, timeout) for _ in range(max(repeats, 3))]
+    rows = [{"family": "small", "n": 0, "mission": "python -c pass", "algorithm": "floor", "runs": len(floor),
+             "status": "ok", "seconds": statistics.median(s["seconds"] for s in floor),
+             "peak_mb": statistics.median(s["peak_mb"] for s in floor)}]
+    runs = [(mission, cfg) for mission in sorted((REFERENCE / "missions").iterdir())
+            for cfg in sorted((mission / "configuration").glob("*"))]
+    for n, (mission, cfg) in enumerate(runs, start=1):  # n numbers the runs (the family has no size)
+        for label, extra in (("exploratory", ["--algorithm", "exploratory"]), ("cpsat", [])):
+            with tempfile.TemporaryDirectory() as tmp:
+                cmd = [sys.executable, "-m", "mutrose_cp", "decompose", str(mission), "--config", cfg.name, "-q",
+                       "--json-summary", "-o", str(Path(tmp) / "out"), *extra]
+                samples = [measure(cmd, mission, timeout) for _ in range(repeats)]
+            ok = [s for s in samples if s["status"] in ("ok", "exit 3")]  # exit 3: nothing valid, as the original
+            row = {"family": "small", "n": n, "mission": f"{mission.name}/{cfg.name}", "algorithm": label,
+                   "runs": len(samples), "status": "ok" if len(ok) == len(samples) else samples[-1]["status"]}
+            if ok:
+                row.update(seconds=statistics.median(s["seconds"] for s in ok),
+                           peak_mb=statistics.median(s["peak_mb"] for s in ok),
+                           task_instances=ok[0].get("task_instances"),
+                           mission_decompositions=ok[0].get("mission_decompositions"))
+            rows.append(row)
+            log(f"small        {row['mission']:50} {label:12} {row['status']:8} {row.get('seconds', 0):6.2f} s "
+                f"{row.get('peak_mb', 0):7.1f} MB")
+    return rows
+
+
 def machine() -> dict:
     info = {"python": platform.python_version(), "platform": platform.platform(), "cpus": os.cpu_count()}
     try:
@@ -205,6 +234,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, help="runs per size (median); default 3, 1 with --quick")
     parser.add_argument("--timeout", type=float, help="per-run time limit in seconds (default 120, 30 with --quick)")
     parser.add_argument("--no-dissertation", action="store_true", help="skip the dissertation's own worlds")
+    parser.add_argument("--no-small", action="store_true", help="skip the reference missions run whole")
     args = parser.parse_args(argv)
     ladder = QUICK_LADDER if args.quick else FULL_LADDER
     if args.max_n:
@@ -215,6 +245,8 @@ def main(argv: list[str] | None = None) -> int:
     started = time.time()
     rows: list[dict] = []
     with tempfile.TemporaryDirectory(prefix="mutrose-bench-") as tmp:
+        if not args.no_small:
+            rows += run_small_missions(repeats, timeout, lambda m: print(m, flush=True))
         for family in args.families:
             rows += run_family(family, ladder, repeats, timeout, Path(tmp), lambda m: print(m, flush=True))
             if not args.no_dissertation:
