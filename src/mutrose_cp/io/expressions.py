@@ -19,7 +19,7 @@ from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from ..errors import MissionError
-from .grammar import grammar_text
+from .grammar import cached_lalr_parser
 from ..model.expressions import (
     Annotation,
     AnnotationLeaf,
@@ -130,15 +130,14 @@ class _ConditionBuilder(Transformer[Token, Condition | None]):
 @lru_cache(maxsize=None)
 def _annotation_parser() -> Lark:
     # lexer="basic" (not the contextual lexer) so that FALLBACK is always the keyword, even
-    # among description words, exactly like the original flex lexer.
-    return Lark(grammar_text("annotation.lark"), parser="lalr", lexer="basic", transformer=_AnnotationBuilder(),
-                maybe_placeholders=True)
+    # among description words, exactly like the original flex lexer.  The tables come from the
+    # cache; the tree is transformed after the parse (a cached parser carries no transformer).
+    return cached_lalr_parser("annotation.lark", lexer="basic", maybe_placeholders=True)
 
 
 @lru_cache(maxsize=None)
 def _condition_parser() -> Lark:
-    return Lark(grammar_text("condition.lark"), parser="lalr", lexer="basic", transformer=_ConditionBuilder(),
-                maybe_placeholders=True)
+    return cached_lalr_parser("condition.lark", lexer="basic", maybe_placeholders=True)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -244,8 +243,8 @@ def parse_node_text(text: str) -> tuple[str, Annotation | None]:
     (the column then counts from its ``[``), else the whole text.
     """
     try:
-        # with a transformer attached, Lark.parse returns what the transformer's start() returns
-        return cast("tuple[str, Annotation | None]", _annotation_parser().parse(text))
+        # the builder's start() gives the result: the transformed tree
+        return _AnnotationBuilder().transform(_annotation_parser().parse(text))
     except UnexpectedInput as err:
         raise _annotation_error(text, err) from None
 
@@ -307,8 +306,7 @@ def make_atom(text: str) -> Atom:
 def _parse_condition_in(source: str, what: str, shown: str, offset: int) -> Condition | None:
     """Parse ``source``, which sits at ``offset`` inside ``shown`` (for error columns)."""
     try:
-        # with a transformer attached, Lark.parse returns what the transformer's start() returns
-        return cast("Condition | None", _condition_parser().parse(source))
+        return _ConditionBuilder().transform(_condition_parser().parse(source))
     except UnexpectedInput as err:
         pos = _error_position(err, source)
         terminals = _expected_terminals(_condition_parser(), source, err, pos)

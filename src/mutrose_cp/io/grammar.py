@@ -1,7 +1,7 @@
-"""The packaged lark grammars, and the HDDL parser's LALR tables cached between runs.
+"""The packaged lark grammars, with their parsers' LALR tables cached between runs.
 
-Building the HDDL parser's tables takes about 0.2 s, most of a small mission's whole run; loading
-them back takes about 0.02 s.  The tables are saved in the user's cache folder
+Building the HDDL parser's tables takes about 0.2 s, most of a small mission's whole run, and
+each expression grammar's 0.017 s; loading them back takes 0.02 s and 0.003 s.  The tables are saved in the user's cache folder
 (``$XDG_CACHE_HOME/mutrose-cp``, else ``~/.cache/mutrose-cp``), in a file named after a digest of
 the grammar, the parser options and the lark and Python versions, so a changed grammar or an
 upgraded lark never meets stale tables.  The cache is only a speed-up: a folder that cannot be
@@ -34,8 +34,7 @@ def grammar_text(name: str) -> str:
 
 def cached_lalr_parser(name: str, **options: Any) -> Lark:
     """The LALR parser of the packaged grammar ``name`` with lark ``options``, its tables
-    read from the cache when they are there.  (Worth it for the HDDL grammar only: the small
-    expression grammars build faster than they load.)"""
+    read from the cache when they are there (about 6x faster than building them)."""
     grammar = grammar_text(name)
     path = _cache_file(name, grammar, options)
     if path is not None:
