@@ -336,3 +336,21 @@ def test_guide_mission() -> None:
     dec = decomposition_dot(mission, 0)
     assert r"3. pick-sample(?r, Sample2, Ward2)\l" in _label_of(dec, "AT1_2|2")
     assert _label_of(dec, "AT4_2|1").startswith(r"t10  AT4_2|1\nManualAnalysis\nrobots: 2..3\n")
+
+
+def test_dot_clusters_indent_their_members():
+    dot = render_module._Dot("g", {}, {}, {})
+    dot.node("a", shape="box")
+    with dot.cluster("cluster_1", 'r = "x"', "#123456"):
+        dot.node("b")
+        dot.edge("a", "b", style=None, constraint=False)
+    dot.edge("b", "a")
+    assert dot.text() == ('digraph "g" {\n'
+                          '    "a" [shape="box"];\n'
+                          '    subgraph "cluster_1" {\n'
+                          '        label="r = \\"x\\""; style="rounded,dashed"; color="#123456";\n'
+                          '        "b";\n'
+                          '        "a" -> "b" [constraint="false"];\n'
+                          '    }\n'
+                          '    "b" -> "a";\n'
+                          '}\n')
