@@ -354,3 +354,14 @@ def test_dot_clusters_indent_their_members():
                           '    }\n'
                           '    "b" -> "a";\n'
                           '}\n')
+
+
+def test_forall_clusters_when_the_root_has_task_children():
+    """object-picking: the forAll at the Task Graph root refines directly into task instances,
+    which carry no variable values: each element's box is labelled by its position."""
+    from conftest import require_reference
+
+    mission = _load(require_reference() / "missions" / "object-picking")
+    dot = decomposition_dot(mission, 0)
+    clusters = re.findall(r'subgraph "(cluster_\d)" \{\n\s+label="([^"]*)";.*\n\s+"([^"]+)" \[', dot)
+    assert clusters == [("cluster_2", "forAll element 2", "AT1_1_2|1"), ("cluster_1", "forAll element 1", "AT1_1_1|1")]
