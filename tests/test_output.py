@@ -109,3 +109,20 @@ def test_world_names_are_escaped_in_the_mission_output(tmp_path):
     tasks = json.loads(written)["tasks"]
     name = 'Central"Ph/ar\\macy~\u00c3\u00a9\x7f'  # the UTF-8 bytes of é, one escape each
     assert any(t["locations"] == name for t in tasks.values())
+
+
+def test_xml_leaf_lists_are_left_out_when_empty():
+    """``<locations>``, ``<triggering_events>``, ``<decomposition>``: one numbered leaf per text,
+    and no element at all (not even an empty one) when there is nothing to list."""
+    import io
+
+    from mutrose_cp.output import _XmlWriter
+
+    fh = io.StringIO()
+    w = _XmlWriter(fh)
+    w.leaves("locations", "t", ["RoomA", "a<b"], 2)
+    w.leaves("triggering_events", "event", (), 2)
+    assert fh.getvalue() == ("        <locations>\n"
+                             "            <t0>RoomA</t0>\n"
+                             "            <t1>a&lt;b</t1>\n"
+                             "        </locations>\n")

@@ -194,3 +194,12 @@ def test_a_read_only_folder(mission, tmp_path, capsys):
         assert list(folder.iterdir()) == []
     finally:
         folder.chmod(0o755)
+
+
+def test_binary_mode_replaces_the_file_with_the_bytes_written(tmp_path):
+    out = tmp_path / "picture.bin"
+    out.write_bytes(b"old")
+    with atomic_writer(out, "wb") as fh:
+        fh.write(b"\x00\r\n")
+    assert out.read_bytes() == b"\x00\r\n"
+    _no_temporaries(tmp_path)

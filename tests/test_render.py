@@ -336,3 +336,32 @@ def test_guide_mission() -> None:
     dec = decomposition_dot(mission, 0)
     assert r"3. pick-sample(?r, Sample2, Ward2)\l" in _label_of(dec, "AT1_2|2")
     assert _label_of(dec, "AT4_2|1").startswith(r"t10  AT4_2|1\nManualAnalysis\nrobots: 2..3\n")
+
+
+def test_dot_clusters_indent_their_members():
+    dot = render_module._Dot("g", {}, {}, {})
+    dot.node("a", shape="box")
+    with dot.cluster("cluster_1", 'r = "x"', "#123456"):
+        dot.node("b")
+        dot.edge("a", "b", style=None, constraint=False)
+    dot.edge("b", "a")
+    assert dot.text() == ('digraph "g" {\n'
+                          '    "a" [shape="box"];\n'
+                          '    subgraph "cluster_1" {\n'
+                          '        label="r = \\"x\\""; style="rounded,dashed"; color="#123456";\n'
+                          '        "b";\n'
+                          '        "a" -> "b" [constraint="false"];\n'
+                          '    }\n'
+                          '    "b" -> "a";\n'
+                          '}\n')
+
+
+def test_forall_clusters_when_the_root_has_task_children():
+    """object-picking: the forAll at the Task Graph root refines directly into task instances,
+    which carry no variable values: each element's box is labelled by its position."""
+    from conftest import require_reference
+
+    mission = _load(require_reference() / "missions" / "object-picking")
+    dot = decomposition_dot(mission, 0)
+    clusters = re.findall(r'subgraph "(cluster_\d)" \{\n\s+label="([^"]*)";.*\n\s+"([^"]+)" \[', dot)
+    assert clusters == [("cluster_2", "forAll element 2", "AT1_1_2|1"), ("cluster_1", "forAll element 1", "AT1_1_1|1")]

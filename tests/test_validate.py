@@ -555,3 +555,62 @@ def test_json_summary(food, tmp_path, capsys, monkeypatch):
     assert (summary["valid"], summary["checked"], summary["invalid_decompositions"]) == (False, 6, [1, 4])
     assert [f"{broken}: {v}" for v in summary["violations"]] == violations
     assert "decomposition 1: t99: not a task of the file" in summary["violations"]
+
+
+# ---------------------------------------------------------------------------------------------
+# 5. Replaying one explanation of a task (the validator's own state bookkeeping)
+
+
+def _replayed(steps, facts=None, values=None, bound=None):
+    from mutrose_cp.validate import State, _StepReplay
+
+    replay = _StepReplay(bound or {"?r": ("r1",)}, State(dict(facts or {}), dict(values or {})))
+    for step in steps:
+        replay.step(step)
+    return replay
+
+
+def _step(pre=(), eff=(), num=(), position=0, name="move"):
+    from mutrose_cp.validate.htn_match import Step
+
+    return Step("action", name, tuple(pre), tuple(eff), tuple(num), position)
+
+
+def test_replay_assumes_an_unknown_atom_once_and_then_holds_to_it():
+    from mutrose_cp.model import Literal
+
+    replay = _replayed([_step(pre=[Literal("at", ("?r",))]),
+                        _step(pre=[Literal("at", ("?r",), False)], position=1, name="leave")])
+    assert replay.assumed == {("at", ("r1",)): True}
+    assert replay.failures == ["precondition not at(r1) of action leave (action 2) does not hold"]
+
+
+def test_replay_reads_its_own_effects_before_the_start_state():
+    from mutrose_cp.model import Literal
+
+    replay = _replayed([_step(eff=[Literal("at", ("?r",), False)]), _step(pre=[Literal("at", ("?r",))], position=1)],
+                       facts={("at", ("r1",)): True})
+    assert replay.changed.facts == {("at", ("r1",)): False}
+    assert replay.failures == ["precondition at(r1) of action move (action 2) does not hold"]
+
+
+def test_replay_numeric_values():
+    """An unknown value is fixed by a required equality; an increase changes a known value
+    only; every numeric effect is recorded for the tasks after."""
+    from mutrose_cp.model import Comparison, NumericEffect
+
+    battery, charge = ("battery", ("r1",)), ("charge", ("r1",))
+    replay = _replayed([_step(pre=[Comparison("battery", ("?r",), "=", 5, False)]),
+                        _step(num=[NumericEffect("increase", "battery", ("?r",), 2),
+                                   NumericEffect("increase", "charge", ("?r",), 1)], position=1),
+                        _step(pre=[Comparison("battery", ("?r",), ">", 9, False)], position=2, name="lift")])
+    assert replay.nums == {battery: 7.0}
+    assert replay.changed.numeric == [(battery, "increase", 2.0), (charge, "increase", 1.0)]
+    assert replay.failures == ["precondition battery(r1) > 9 of action lift (action 3) does not hold: the value is 7"]
+
+
+def test_replay_skips_conditions_on_unbound_variables():
+    from mutrose_cp.model import Literal
+
+    replay = _replayed([_step(pre=[Literal("at", ("?x",))], eff=[Literal("done", ("?x",))])])
+    assert (replay.assumed, replay.changed.facts, replay.failures) == ({}, {}, [])

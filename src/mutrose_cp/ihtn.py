@@ -14,13 +14,13 @@ import shutil
 import signal
 import tempfile
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Collection, Iterator
 
 from .constraints import EC, FB, SEQ
 from .errors import MissionError
 from .htn import TreeNode
-from .output import OutputModel, write_boost_json
 from .model.task_graph import Decomposition
+from .output import OutputModel, Tree, write_boost_json
 
 
 def _orderings(members: list[int], succ: dict[int, set[int]]) -> Iterator[list[int]]:
@@ -71,44 +71,16 @@ class _Agents:
             self.display[name] = f"r{len(self.display) + 1}"
         return name
 
+    def _decomposition(self, d: int) -> Decomposition:
+        return self.model.tg.decomposition(d).decomposition
+
     def _assign(self, d: int, partners: set[int]) -> None:
-        dec = self.model.tg.vertices[d].decomposition
-        task = self.domain.task_by_name[dec.instance.name]
-        bound = {}
-        for pv in dec.instance.parameters:
-            bound[pv.hddl_param] = pv
-        agents: set[str] = set()
-        values: dict[str, str] = {}
-        unbound: list[tuple[str, str]] = []
-        for p in task.parameters:
-            pv = bound.get(p.name)
-            if pv is not None:
-                if isinstance(pv.value, tuple):
-                    if not self._is_location_type(p.type):
-                        raise MissionError("Agent-related type container is not supported for iHTN generation "
-                                           f"(parameter {p.name} of {dec.id} holds a collection)")
-                    continue
-                values[p.name] = pv.value
-                if not self._is_location_type(p.type):
-                    agents.add(pv.value)
-            else:
-                if p.type not in self.domain.robot_sorts:
-                    raise MissionError(f"Variable {p.name} of HDDL type {p.type} is not grounded. iHTN generation "
-                                       "does not support non-ground variables that are not robot-related")
-                unbound.append((p.name, p.type))
-        robots: dict[str, list[str]] = {}
-        earlier = sorted(e for e in partners if e in self.robot_agents)
-        if earlier and unbound:
-            firsts = [self._question_agents(e) for e in earlier]
-            if len(unbound) == 1 and unbound[0][1] != "robotteam":
-                if firsts[0]:
-                    robots[unbound[0][0]] = [firsts[0][0]]
-            elif len(unbound) == 1:
-                robots[unbound[0][0]] = [f[0] for f in firsts if f]
-            else:
-                available = firsts[0]
-                for (name, _t), agent in zip(unbound, available):
-                    robots[name] = [agent]
+        """The agents of decomposition vertex ``d``: its bound non-location values, and a robot
+        per unbound robot parameter, shared with an execution-constrained partner assigned
+        before it where there is one, else a fresh anonymous robot."""
+        dec = self._decomposition(d)
+        values, agents, unbound = self._bound(dec)
+        robots = self._shared_robots(unbound, partners)
         for name, _t in unbound:
             if name not in robots or not robots[name]:
                 robots[name] = [self._fresh(name, dec)]
@@ -118,9 +90,56 @@ class _Agents:
         self.agents[d] = agents
         self.all |= agents
 
-    def _question_agents(self, e: int) -> list[str]:
-        dec = self.model.tg.vertices[e].decomposition
+    def _bound(self, dec: Decomposition) -> tuple[dict[str, str], set[str], list[tuple[str, str]]]:
+        """(parameter -> bound single value, the agents among those values, the unbound
+        parameters with their types).  A bound collection is skipped if it is of a location
+        type and refused otherwise; an unbound parameter must be a robot."""
         task = self.domain.task_by_name[dec.instance.name]
+        bound = {v.hddl_param: v for v in dec.instance.parameters}  # the last entry wins
+        agents: set[str] = set()
+        values: dict[str, str] = {}
+        unbound: list[tuple[str, str]] = []
+        for p in task.parameters:
+            pv = bound.get(p.name)
+            if pv is None:
+                if p.type not in self.domain.robot_sorts:
+                    raise MissionError(f"Variable {p.name} of HDDL type {p.type} is not grounded. iHTN generation "
+                                       "does not support non-ground variables that are not robot-related")
+                unbound.append((p.name, p.type))
+            elif isinstance(pv.value, tuple):
+                if not self._is_location_type(p.type):
+                    raise MissionError("Agent-related type container is not supported for iHTN generation "
+                                       f"(parameter {p.name} of {dec.id} holds a collection)")
+            else:
+                values[p.name] = pv.value
+                if not self._is_location_type(p.type):
+                    agents.add(pv.value)
+        return values, agents, unbound
+
+    def _shared_robots(self, unbound: list[tuple[str, str]], partners: set[int]) -> dict[str, list[str]]:
+        """Robots taken over from the execution-constrained partners already assigned (§6.3):
+        a single robot parameter gets the first partner's first robot, a single robot team
+        the first robot of every partner, several parameters the first partner's robots in
+        order."""
+        robots: dict[str, list[str]] = {}
+        earlier = sorted(e for e in partners if e in self.robot_agents)
+        if not earlier or not unbound:
+            return robots
+        firsts = [self._question_agents(e) for e in earlier]
+        if len(unbound) == 1 and unbound[0][1] != "robotteam":
+            if firsts[0]:
+                robots[unbound[0][0]] = [firsts[0][0]]
+        elif len(unbound) == 1:
+            robots[unbound[0][0]] = [f[0] for f in firsts if f]
+        else:
+            available = firsts[0]
+            for (name, _t), agent in zip(unbound, available):
+                robots[name] = [agent]
+        return robots
+
+    def _question_agents(self, e: int) -> list[str]:
+        """The robots already given to decomposition vertex ``e``, in parameter order."""
+        task = self.domain.task_by_name[self._decomposition(e).instance.name]
         out = []
         for p in task.parameters:
             out.extend(self.robot_agents[e].get(p.name, []))
@@ -132,7 +151,7 @@ class _Agents:
     def of_args(self, d: int, args: tuple[str, ...]) -> set[str]:
         """Agents among the values of ``args`` (renamed parameters of a tree node)."""
         out: set[str] = set()
-        task = self.domain.task_by_name[self.model.tg.vertices[d].decomposition.instance.name]
+        task = self.domain.task_by_name[self._decomposition(d).instance.name]
         types = {p.name: p.type for p in task.parameters}
         for a in args:
             if a in self.robot_agents[d]:
@@ -142,10 +161,13 @@ class _Agents:
         return out
 
 
-def _tree_json(nodes: dict[str, dict], node: TreeNode, parent: str, d: int, agents: _Agents,
+IhtnNodes = dict[str, dict[str, Tree]]  # node key ("0", "1", ...) -> the node's fields
+
+
+def _tree_json(nodes: IhtnNodes, node: TreeNode, parent: str, d: int, agents: _Agents,
                location: set[str]) -> str:
     key = str(len(nodes))
-    entry: dict = {"name": node.name, "type": node.kind, "parent": parent}
+    entry: dict[str, Tree] = {"name": node.name, "type": node.kind, "parent": parent}
     nodes[key] = entry
     if node.kind == "action":
         values = agents.values[d]
@@ -202,14 +224,23 @@ def count_orderings(members: list[int], succ: dict[int, set[int]], cap: int, bud
     return count(0)
 
 
+def _listed(model: OutputModel) -> Collection[list[int]]:
+    """The mission decompositions of an export: a collection, since an export reads them more
+    than once (to count the files, then to write them)."""
+    decompositions = model.decompositions
+    if not isinstance(decompositions, Collection):
+        raise TypeError("an iHTN export needs the mission decompositions as a list, not a stream")
+    return decompositions
+
+
 def ihtn_file_count(model: OutputModel, one_per_decomposition: bool, cap: int, budget: int | None = None) -> int:
     """The number of files an export writes (at most ``cap``, which means "at least ``cap``");
     with a ``budget`` of counting work per decomposition, :class:`CountTooCostly` beyond it."""
     if one_per_decomposition:
-        return min(len(model.decompositions), cap)
+        return min(len(_listed(model)), cap)
     succ, _ = _constraint_index(model)
     total = 0
-    for md in model.decompositions:
+    for md in _listed(model):
         members = set(md)
         total += count_orderings(list(md), {d: succ.get(d, set()) & members for d in md}, cap - total, budget)
         if total >= cap:
@@ -217,39 +248,27 @@ def ihtn_file_count(model: OutputModel, one_per_decomposition: bool, cap: int, b
     return total
 
 
-def write_ihtns(model: OutputModel, folder: Path, progress=None, *, one_per_decomposition: bool = False) -> int:
+def write_ihtns(model: OutputModel, folder: Path, progress: Callable[[int], None] | None = None, *,
+                one_per_decomposition: bool = False) -> int:
     """Write ``ihtn_<n>.json`` files into ``folder``, all or nothing.
 
     The files are built in a temporary folder beside ``folder`` and then moved in under a lock,
     with SIGINT and SIGTERM held back for those few renames; old ``ihtn_<n>.json`` files that
     the new export does not replace are removed.  No other file of ``folder`` is touched, and
     two concurrent exports leave the whole result of one of them."""
-    tg = model.tg
     succ, ec = _constraint_index(model)
     folder.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=folder.parent))
     try:
         count = 0
-        for md in model.decompositions:
+        for md in _listed(model):
             agents = _Agents(model, list(md), ec)
             member_set = set(md)
             local = {d: succ.get(d, set()) & member_set for d in md}
             for order in _orderings(list(md), local):
                 count += 1
-                nodes: dict[str, dict] = {}
-                root = {"name": "ROOT", "type": "task", "parent": "-1", "agents": agents.show(agents.all),
-                        "children": ["1"]}
-                nodes["0"] = root
-                rm = {"name": "ROOT_M", "type": "method", "parent": "0", "agents": agents.show(agents.all),
-                      "children": []}
-                nodes["1"] = rm
-                for d in order:
-                    dec = tg.vertices[d].decomposition
-                    loc = dec.instance.location
-                    location = set(loc) if isinstance(loc, tuple) else ({loc} if loc else set())
-                    rm["children"].append(_tree_json(nodes, dec.path.tree, "1", d, agents, location))
                 with open(staging / f"ihtn_{count}.json", "w", encoding="utf-8", newline="") as fh:
-                    write_boost_json(nodes, fh)
+                    write_boost_json(_ihtn_nodes(model, order, agents), fh)
                     fh.write("\n")
                 if progress is not None:
                     progress(count)
@@ -259,6 +278,23 @@ def write_ihtns(model: OutputModel, folder: Path, progress=None, *, one_per_deco
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return count
+
+
+def _ihtn_nodes(model: OutputModel, order: list[int], agents: _Agents) -> IhtnNodes:
+    """The nodes of one iHTN file: a ROOT task and its ROOT_M method, whose children are the
+    task trees of the decompositions in ``order``, numbered depth-first."""
+    nodes: IhtnNodes = {}
+    nodes["0"] = {"name": "ROOT", "type": "task", "parent": "-1", "agents": agents.show(agents.all),
+                  "children": ["1"]}
+    children: list[str] = []
+    nodes["1"] = {"name": "ROOT_M", "type": "method", "parent": "0", "agents": agents.show(agents.all),
+                  "children": children}
+    for d in order:
+        dec = model.tg.decomposition(d).decomposition
+        loc = dec.instance.location
+        location = set(loc) if isinstance(loc, tuple) else ({loc} if loc else set())
+        children.append(_tree_json(nodes, dec.path.tree, "1", d, agents, location))
+    return nodes
 
 
 def _swap_in(staging: Path, folder: Path, count: int) -> None:

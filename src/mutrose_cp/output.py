@@ -10,15 +10,16 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass
-from typing import IO, Any, Iterable, Iterator, Mapping
+from typing import IO, Any, Iterable, Iterator, Mapping, Sequence, TypeAlias
 
 from .constraints import EC, SEQ, Constraint
 from .errors import MissionError
-from .model import Configuration, Domain, InitialState, Literal
+from .model import Configuration, Domain, InitialState, Literal, SemanticMapping
 from .output_file import atomic_writer
 from .model.task_graph import Decomposition, TaskGraph
 
-Tree = Any  # str | list[Tree] | dict[str, Tree]
+# a JSON value as PropertyTree holds it: every scalar is a string
+Tree: TypeAlias = "str | Sequence[Tree] | Mapping[str, Tree]"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -117,7 +118,7 @@ class PredicatePrinter:
         self.config = config
         self.sorts = state.sorts
 
-    def _mapping(self, lit: Literal, types: Mapping[str, str]):
+    def _mapping(self, lit: Literal, types: Mapping[str, str]) -> SemanticMapping | None:
         for m in self.config.semantic_mapping:
             if m.pred != lit.predicate or len(m.arg_sorts) < len(lit.args):
                 continue
@@ -294,6 +295,16 @@ class OutputBuilder:
         """The original's XML: four sibling top-level elements after the declaration."""
         w = _XmlWriter(fh)
         fh.write('<?xml version="1.0" encoding="utf-8"?>\n')
+        self._xml_actions(w)
+        w.open("tasks", 0)
+        for i, d in enumerate(self.decs):
+            self._xml_task(w, i, d.decomposition, d.group, d.divisible)
+        w.close("tasks", 0)
+        self._xml_constraints(w)
+        self._xml_mission_decompositions(w)
+
+    def _xml_actions(self, w: "_XmlWriter") -> None:
+        """Every action used by some decomposition, with its required capabilities."""
         w.open("actions", 0)
         for i, (name, caps) in enumerate(self.actions()):
             w.open(f"action{i}", 1)
@@ -307,26 +318,29 @@ class OutputBuilder:
                 w.empty("capabilities", 2, {"number": "0"})
             w.close(f"action{i}", 1)
         w.close("actions", 0)
-        w.open("tasks", 0)
-        for i, d in enumerate(self.decs):
-            self._xml_task(w, i, d.decomposition, d.group, d.divisible)
-        w.close("tasks", 0)
-        if self.m.constraints:
-            w.open("constraints", 0)
-            for i, c in enumerate(self.m.constraints):
-                w.open(f"constraint{i}", 1)
-                w.leaf("type", "SEQ" if c.kind == SEQ else "EC", 2)
-                w.open("task_instances", 2)
-                w.leaf("id0", "task" + self.key[c.first][1:], 3)
-                w.leaf("id1", "task" + self.key[c.second][1:], 3)
-                w.close("task_instances", 2)
-                if c.kind == EC:
-                    w.leaf("group", str(c.group), 2)
-                    w.leaf("divisible", str(c.divisible), 2)
-                w.close(f"constraint{i}", 1)
-            w.close("constraints", 0)
-        else:
+
+    def _xml_constraints(self, w: "_XmlWriter") -> None:
+        """SEQ and EC constraints between task keys (written ``task<m>`` here, not ``t<m>``)."""
+        if not self.m.constraints:
             w.empty("constraints", 0)
+            return
+        w.open("constraints", 0)
+        for i, c in enumerate(self.m.constraints):
+            w.open(f"constraint{i}", 1)
+            w.leaf("type", "SEQ" if c.kind == SEQ else "EC", 2)
+            w.open("task_instances", 2)
+            w.leaf("id0", "task" + self.key[c.first][1:], 3)
+            w.leaf("id1", "task" + self.key[c.second][1:], 3)
+            w.close("task_instances", 2)
+            if c.kind == EC:
+                w.leaf("group", str(c.group), 2)
+                w.leaf("divisible", str(c.divisible), 2)
+            w.close(f"constraint{i}", 1)
+        w.close("constraints", 0)
+
+    def _xml_mission_decompositions(self, w: "_XmlWriter") -> None:
+        """The valid mission decompositions, streamed: the element is opened on the first one,
+        since the decompositions may be a generator whose emptiness is only known at the end."""
         first = True
         for i, md in enumerate(self.m.decompositions):
             if first:
@@ -345,10 +359,29 @@ class OutputBuilder:
 
     def _xml_task(self, w: "_XmlWriter", i: int, dec: Decomposition, group: bool, divisible: bool) -> None:
         inst = dec.instance
-        task = self.m.domain.task_by_name[inst.name]
         w.open(f"task{i}", 1)
         w.leaf("id", dec.id, 2)
         w.leaf("name", inst.name, 2)
+        self._xml_arguments(w, dec)
+        loc = inst.location
+        w.leaves("locations", "t", list(loc) if isinstance(loc, tuple) else ([loc] if loc else []), 2)
+        rn = inst.robot_number
+        attrs = {"fixed": "True", "num": str(rn.min)} if rn.fixed else {"fixed": "False", "min": str(rn.min), "max": str(rn.max)}
+        w.empty("robots_num", 2, attrs)
+        pre, eff = self.printer.printed(dec)
+        _xml_predicates(w, "preconditions", "prec", pre)
+        _xml_predicates(w, "effects", "eff", eff)
+        w.leaves("triggering_events", "event", inst.triggering_events, 2)
+        w.leaves("decomposition", "action", [s.name for s in dec.path.actions], 2)
+        w.leaf("group", str(group), 2)
+        w.leaf("divisible", str(divisible), 2)
+        w.close(f"task{i}", 1)
+
+    def _xml_arguments(self, w: "_XmlWriter", dec: Decomposition) -> None:
+        """Every parameter of the HDDL task with its value (a collection space-separated, an
+        unbound parameter empty)."""
+        inst = dec.instance
+        task = self.m.domain.task_by_name[inst.name]
         w.open("arguments", 2)
         values: dict[str, str] = {p.name: "" for p in task.parameters}
         for pv in inst.parameters:
@@ -361,40 +394,15 @@ class OutputBuilder:
             w.leaf("value", values[p.name], 4)
             w.close(f"arg{j}", 3)
         w.close("arguments", 2)
-        loc = inst.location
-        locs = list(loc) if isinstance(loc, tuple) else ([loc] if loc else [])
-        if locs:
-            w.open("locations", 2)
-            for j, l in enumerate(locs):
-                w.leaf(f"t{j}", l, 3)
-            w.close("locations", 2)
-        rn = inst.robot_number
-        attrs = {"fixed": "True", "num": str(rn.min)} if rn.fixed else {"fixed": "False", "min": str(rn.min), "max": str(rn.max)}
-        w.empty("robots_num", 2, attrs)
-        pre, eff = self.printer.printed(dec)
-        if pre:
-            w.open("preconditions", 2)
-            for j, p in enumerate(pre):
-                w.leaf(f"prec{j}", p.text, 3, {"vars": ",".join(p.args), "var_types": ",".join(p.sorts)})
-            w.close("preconditions", 2)
-        if eff:
-            w.open("effects", 2)
-            for j, p in enumerate(eff):
-                w.leaf(f"eff{j}", p.text, 3, {"vars": ",".join(p.args), "var_types": ",".join(p.sorts)})
-            w.close("effects", 2)
-        if inst.triggering_events:
-            w.open("triggering_events", 2)
-            for j, e in enumerate(inst.triggering_events):
-                w.leaf(f"event{j}", e, 3)
-            w.close("triggering_events", 2)
-        if dec.path.actions:
-            w.open("decomposition", 2)
-            for j, s in enumerate(dec.path.actions):
-                w.leaf(f"action{j}", s.name, 3)
-            w.close("decomposition", 2)
-        w.leaf("group", str(group), 2)
-        w.leaf("divisible", str(divisible), 2)
-        w.close(f"task{i}", 1)
+
+
+def _xml_predicates(w: "_XmlWriter", tag: str, prefix: str, preds: list[PrintedPredicate]) -> None:
+    """Printed predicates as ``<prec0 vars=".." var_types="..">text</prec0>``; nothing if none."""
+    if preds:
+        w.open(tag, 2)
+        for j, pred in enumerate(preds):
+            w.leaf(f"{prefix}{j}", pred.text, 3, {"vars": ",".join(pred.args), "var_types": ",".join(pred.sorts)})
+        w.close(tag, 2)
 
 
 def _xml_escape(s: str) -> str:
@@ -427,8 +435,18 @@ class _XmlWriter:
         else:
             self.fh.write(f"{'    ' * level}<{tag}{self._attrs(attrs)}>{_xml_escape(text)}</{tag}>\n")
 
+    def leaves(self, tag: str, prefix: str, texts: Sequence[str], level: int) -> None:
+        """``<tag>`` holding ``<prefix0>``, ``<prefix1>``... one leaf per text; nothing at all
+        (not even an empty element) when there is no text, as the original writes it."""
+        if not texts:
+            return
+        self.open(tag, level)
+        for j, text in enumerate(texts):
+            self.leaf(f"{prefix}{j}", text, level + 1)
+        self.close(tag, level)
 
-def write_output(model: OutputModel, path: str | os.PathLike, file_type: str) -> None:
+
+def write_output(model: OutputModel, path: str | os.PathLike[str], file_type: str) -> None:
     """Write the output file atomically in ``json`` or ``xml``."""
     builder = OutputBuilder(model)
     with atomic_writer(path) as fh:

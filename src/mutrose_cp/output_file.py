@@ -14,9 +14,9 @@ import os
 import stat
 import sys
 import tempfile
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
-from typing import IO, Iterator
+from typing import IO, Any, Iterator, Literal, overload
 
 from .errors import MissionError
 
@@ -29,44 +29,90 @@ def _umask() -> int:
     return mask
 
 
-def _failure(path: str | os.PathLike, err: OSError) -> MissionError:
+def _failure(path: str | os.PathLike[str], err: OSError) -> MissionError:
     reason = err.strerror or str(err)
     return MissionError(f"cannot write the output: {reason}", os.fspath(path))
 
 
+@overload
+def atomic_writer(path: str | os.PathLike[str], mode: Literal["w"] = "w") -> AbstractContextManager[IO[str]]: ...
+
+
+@overload
+def atomic_writer(path: str | os.PathLike[str], mode: Literal["wb"]) -> AbstractContextManager[IO[bytes]]: ...
+
+
 @contextmanager
-def atomic_writer(path: str | os.PathLike, mode: str = "w") -> Iterator[IO]:
+def atomic_writer(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO[Any]]:
     """A file object for the output at ``path`` (see the module docstring)."""
     if os.fspath(path) == STDOUT:
-        stream = sys.stdout.buffer if "b" in mode else sys.stdout
-        try:
+        with _standard_output(mode) as stream:
             yield stream
-            stream.flush()
-        except BrokenPipeError:
-            # nothing more can reach the reader; keep the interpreter's final flush quiet
-            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-            raise MissionError("cannot write the output: the reader closed the pipe", "standard output") from None
-        except OSError as err:
-            raise _failure("standard output", err) from None
         return
     target = Path(os.path.realpath(path))  # a link stays a link: replace what it points to
+    existing = _existing(target, path)
+    if existing is not None and not stat.S_ISREG(existing.st_mode):
+        with _written_through(target, path, mode) as fh:
+            yield fh
+        return
+    with _replaced(target, path, mode, existing) as fh:
+        yield fh
+
+
+def _text_options(mode: str) -> tuple[str | None, str | None]:
+    """``open``'s encoding and newline: UTF-8 text with the newlines as written, or bytes."""
+    return (None, None) if "b" in mode else ("utf-8", "")
+
+
+@contextmanager
+def _standard_output(mode: str) -> Iterator[IO[Any]]:
+    """Standard output, flushed at the end, so that a write error is reported here (as the
+    user's error) and not by the interpreter at exit."""
+    stream: IO[Any] = sys.stdout.buffer if "b" in mode else sys.stdout
+    try:
+        yield stream
+        stream.flush()
+    except BrokenPipeError:
+        # nothing more can reach the reader; keep the interpreter's final flush quiet
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        raise MissionError("cannot write the output: the reader closed the pipe", "standard output") from None
+    except OSError as err:
+        raise _failure("standard output", err) from None
+
+
+def _existing(target: Path, path: str | os.PathLike[str]) -> os.stat_result | None:
+    """The status of the file to be replaced, ``None`` if there is none yet; a folder is refused
+    here, before anything is written."""
     try:
         existing = os.stat(target)
     except FileNotFoundError:
-        existing = None
+        return None
     except OSError as err:
         raise _failure(path, err) from None
-    if existing is not None and stat.S_ISDIR(existing.st_mode):
+    if stat.S_ISDIR(existing.st_mode):
         raise MissionError("cannot write the output: it is a folder; give a file name", os.fspath(path))
-    encoding = None if "b" in mode else "utf-8"
-    newline = None if "b" in mode else ""
-    if existing is not None and not stat.S_ISREG(existing.st_mode):
-        try:  # a device or a FIFO: write through, never replace it
-            with open(target, mode, encoding=encoding, newline=newline) as fh:
-                yield fh
-        except OSError as err:
-            raise _failure(path, err) from None
-        return
+    return existing
+
+
+@contextmanager
+def _written_through(target: Path, path: str | os.PathLike[str], mode: str) -> Iterator[IO[Any]]:
+    """A device or a FIFO is opened and written in place: replacing it would break whoever
+    reads it (``/dev/null``, a named pipe)."""
+    encoding, newline = _text_options(mode)
+    try:
+        with open(target, mode, encoding=encoding, newline=newline) as fh:
+            yield fh
+    except OSError as err:
+        raise _failure(path, err) from None
+
+
+@contextmanager
+def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
+              existing: os.stat_result | None) -> Iterator[IO[Any]]:
+    """A temporary file beside ``target``, renamed over it only once the whole text is written;
+    on any failure (or interruption) the temporary file is removed and ``target`` is left as
+    it was."""
+    encoding, newline = _text_options(mode)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)

@@ -19,19 +19,23 @@ import os
 import shutil
 import subprocess
 import textwrap
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Iterable, Mapping
+from typing import TYPE_CHECKING, Iterable, Iterator, Mapping
 
 from .annotation_tree import GOAL, OPERATOR, TASK, RatNode
 from .constraints import EC, FB, SEQ
 from .errors import MissionError, NoDecompositionError
-from .model.task_graph import DecompositionVertex, EdgeKind, GoalVertex, OperatorVertex, TaskVertex
+from .model.task_graph import DecompositionVertex, EdgeKind, GoalVertex, OperatorVertex, ScopeVertex, TaskVertex
 
 if TYPE_CHECKING:  # pragma: no cover
+    from .constraints import Constraint
     from .expansion import TaskInstance
+    from .htn import Step
     from .mission import Mission
-    from .model import GMNode
+    from .model import ForAll, GMNode
+    from .model.task_graph import Edge, TaskGraph, Vertex
 
 __all__ = [
     "RenderError",
@@ -93,7 +97,10 @@ def _left_label(centred: Iterable[str], left: Iterable[str]) -> _Escaped:
 
 
 class _Dot:
-    """Collects nodes, edges and clusters, in insertion order, and prints them as DOT."""
+    """Collects nodes, edges and clusters, in insertion order, and prints them as DOT.
+
+    Statements are indented by their nesting: one level in the graph, one more inside each
+    :meth:`cluster`."""
 
     def __init__(self, name: str, graph: Mapping[str, str], node: Mapping[str, str],
                  edge: Mapping[str, str]) -> None:
@@ -101,6 +108,7 @@ class _Dot:
         self.defaults = (("graph", graph), ("node", node), ("edge", edge))
         self.body: list[str] = []
         self.ids: set[str] = set()
+        self.indent = 1
 
     @staticmethod
     def _attrs(attrs: Mapping[str, object]) -> str:
@@ -122,14 +130,25 @@ class _Dot:
         self.ids.add(node_id)
         return node_id
 
-    def node(self, node_id: str, indent: int = 1, **attrs: object) -> None:
-        self.body.append("    " * indent + _quote(node_id) + self._attrs(attrs) + ";")
+    def node(self, node_id: str, **attrs: object) -> None:
+        self.raw(_quote(node_id) + self._attrs(attrs) + ";")
 
-    def edge(self, a: str, b: str, indent: int = 1, **attrs: object) -> None:
-        self.body.append("    " * indent + f"{_quote(a)} -> {_quote(b)}" + self._attrs(attrs) + ";")
+    def edge(self, a: str, b: str, **attrs: object) -> None:
+        self.raw(f"{_quote(a)} -> {_quote(b)}" + self._attrs(attrs) + ";")
 
-    def raw(self, line: str, indent: int = 1) -> None:
-        self.body.append("    " * indent + line)
+    def raw(self, line: str) -> None:
+        self.body.append("    " * self.indent + line)
+
+    @contextmanager
+    def cluster(self, name: str, label: str, colour: str) -> Iterator[None]:
+        """A ``subgraph cluster_...`` drawn as a dashed rounded box: the statements made inside
+        the ``with`` block are its members."""
+        self.raw(f"subgraph {_quote(name)} {{")
+        self.indent += 1
+        self.raw(f'label={_quote(label)}; style="rounded,dashed"; color="{colour}";')
+        yield
+        self.indent -= 1
+        self.raw("}")
 
     def text(self) -> str:
         out = [f"digraph {_quote(self.name)} {{"]
@@ -209,38 +228,53 @@ def _goal_lines(node: "GMNode", var_maps: Mapping[str, object], forall_hub: bool
     """Label lines of a goal: its text and what the decomposer reads from its properties."""
     lines = _wrap(_goal_title(node))
     if node.query is not None:
-        lines += _wrap(f"Query: {node.query.text}", WRAP + 10)
-        if node.controls:
-            var = node.controls[0].name
-            b = var_maps.get(var)
-            if b is not None:
-                lines += _wrap(f"{var} = {_value(getattr(b, 'value', b))}", WRAP + 10)
+        lines += _query_lines(node, var_maps)
     elif node.forall is not None:
-        fa = node.forall
-        cond = f" | {fa.condition_text}" if fa.condition_text else ""
-        lines += _wrap(f"forAll {fa.iteration} in {fa.iterated}{cond}", WRAP + 10)
-        if not forall_hub:
-            b = var_maps.get(fa.iteration)
-            iterated = var_maps.get(fa.iterated)
-            if b is not None:
-                lines.append(f"{fa.iteration} = {_value(getattr(b, 'value', b))}")
-            elif iterated is not None and getattr(iterated, "value", None) == ():
-                lines.append(f"{fa.iterated} is empty: no instance")
+        lines += _forall_lines(node.forall, var_maps, forall_hub)
     elif node.goal_type == "Achieve" and node.achieve_text:
         lines += _wrap(f"Achieve: {node.achieve_text}", WRAP + 10)
     if node.context is not None:
         lines += _wrap(f'{node.context.kind}: "{node.context.text}"', WRAP + 10)
-    flags = []
     if not node.group:
-        flags.append("Group=False")
+        lines.append("Group=False")
     elif not node.divisible:
-        flags.append("Divisible=False")
-    if flags:
-        lines.append(", ".join(flags))
+        lines.append("Divisible=False")
     return lines
 
 
-def _action_text(step, binding: Mapping[str, object]) -> str:
+def _bound_value(binding: object) -> object:
+    """The value of a variable binding (a :class:`~mutrose_cp.query.Binding` or a bare value)."""
+    return getattr(binding, "value", binding)
+
+
+def _query_lines(node: "GMNode", var_maps: Mapping[str, object]) -> list[str]:
+    """A query goal's query, and the value it gave the variable it controls (when known here)."""
+    assert node.query is not None
+    lines = _wrap(f"Query: {node.query.text}", WRAP + 10)
+    if node.controls:
+        var = node.controls[0].name
+        b = var_maps.get(var)
+        if b is not None:
+            lines += _wrap(f"{var} = {_value(_bound_value(b))}", WRAP + 10)
+    return lines
+
+
+def _forall_lines(fa: "ForAll", var_maps: Mapping[str, object], forall_hub: bool) -> list[str]:
+    """A forAll goal's iteration, and for one copy (not the hub over all copies) the element it
+    iterates over, or a note that the iterated collection is empty."""
+    cond = f" | {fa.condition_text}" if fa.condition_text else ""
+    lines = _wrap(f"forAll {fa.iteration} in {fa.iterated}{cond}", WRAP + 10)
+    if not forall_hub:
+        b = var_maps.get(fa.iteration)
+        iterated = var_maps.get(fa.iterated)
+        if b is not None:
+            lines.append(f"{fa.iteration} = {_value(_bound_value(b))}")
+        elif iterated is not None and getattr(iterated, "value", None) == ():
+            lines.append(f"{fa.iterated} is empty: no instance")
+    return lines
+
+
+def _action_text(step: "Step", binding: Mapping[str, object]) -> str:
     args = ", ".join(_value(binding[a]) if a in binding else a for a in step.args)
     return f"{step.name}({args})"
 
@@ -260,94 +294,112 @@ def goal_model_dot(mission: "Mission", rankdir: str = "LR") -> str:
     removed them from the Task Graph).  Node ids: the task instance id (``AT1_2``),
     goal ids with their forAll position (``G4_2``), ``<goal>.op`` for a goal's operator and
     ``<goal>.forall`` for a forAll goal."""
-    exp = mission.expansion
-    gm = mission.goal_model
-    instances = {i.id: i for i in exp.instances}
-    try:
-        kept: set[str] | None = {v.content for v in mission.task_graph.tasks()}
-    except MissionError:
-        kept = None  # the Task Graph cannot be built: draw the expansion only
-    dot = _new_graph("goal_model", rankdir, None, nodesep="0.15", ranksep="0.3")
+    view = _GoalModelView(mission, rankdir)
+    view.visit(mission.expansion.rat, None, False, "")
+    return view.dot.text()
 
-    def goal_node(key: str, suffix: str, var_maps: Mapping[str, object], hub: bool = False) -> str:
-        g = gm.node(key)
+
+class _GoalModelView:
+    """Draws the runtime annotation tree, one method per kind of node.  ``suffix`` carries the
+    forAll position (``_2``, ``_2_1``) down the tree, so that the copies of a goal under
+    different forAll elements get distinct node ids."""
+
+    def __init__(self, mission: "Mission", rankdir: str) -> None:
+        self.gm = mission.goal_model
+        self.instances = {i.id: i for i in mission.expansion.instances}
+        self.kept: set[str] | None
+        try:
+            self.kept = {v.content for v in mission.task_graph.tasks()}
+        except MissionError:
+            self.kept = None  # the Task Graph cannot be built: draw the expansion only
+        self.dot = _new_graph("goal_model", rankdir, None, nodesep="0.15", ranksep="0.3")
+
+    def goal_node(self, key: str, suffix: str, var_maps: Mapping[str, object], hub: bool = False) -> str:
+        g = self.gm.node(key)
         colours = QUERY_COLOURS if g.query is not None else FORALL_COLOURS if g.forall is not None else GOAL_COLOURS
-        node_id = dot.unique(f"{g.id}{suffix}" + (".forall" if hub else ""))
-        dot.node(node_id, shape="box", label=_label(_goal_lines(g, var_maps, hub)),
-                 **_filled(colours, "rounded,filled"))
+        node_id = self.dot.unique(f"{g.id}{suffix}" + (".forall" if hub else ""))
+        self.dot.node(node_id, shape="box", label=_label(_goal_lines(g, var_maps, hub)),
+                      **_filled(colours, "rounded,filled"))
         return node_id
 
-    def op_node(op: RatNode, owner: str) -> str:
+    def op_node(self, op: RatNode, owner: str) -> str:
         symbol = "OR" if op.or_decomposition else op.content
-        node_id = dot.unique(f"{owner}.op")
-        dot.node(node_id, shape="ellipse", label=symbol, margin="0.04,0.02", height="0.3",
-                 fontsize="11" if symbol in (";", "#") else "9", **_filled(OPERATOR_COLOURS))
+        node_id = self.dot.unique(f"{owner}.op")
+        self.dot.node(node_id, shape="ellipse", label=symbol, margin="0.04,0.02", height="0.3",
+                      fontsize="11" if symbol in (";", "#") else "9", **_filled(OPERATOR_COLOURS))
         return node_id
 
-    def link(parent: str | None, child: str, alternative: bool) -> None:
+    def link(self, parent: str | None, child: str, alternative: bool) -> None:
+        """The edge from the parent's node (none at the root); dashed between OR alternatives."""
         if parent is not None:
-            dot.edge(parent, child, style="dashed" if alternative else None)
+            self.dot.edge(parent, child, style="dashed" if alternative else None)
 
-    def visit(node: RatNode, parent: str | None, alternative: bool, suffix: str) -> None:
+    def visit(self, node: RatNode, parent: str | None, alternative: bool, suffix: str) -> None:
         if node.kind == TASK:
-            lines = _task_lines(node.content, instances.get(node.content))
-            node_id = dot.unique(node.content)
-            if kept is not None and node.content not in kept:
-                # a false condition context that nothing enables removed this branch
-                lines.append("removed: context is false")
-                dot.node(node_id, shape="box", label=_label(lines), fontcolor="#666666",
-                         **_filled(("#eeeeee", "#999999"), "filled,dashed"))
-            else:
-                dot.node(node_id, shape="box", label=_label(lines), **_filled(TASK_COLOURS))
-            link(parent, node_id, alternative)
+            self.task(node, parent, alternative)
+        elif node.kind == GOAL:
+            self.link(parent, self.goal_node(node.related_goal or node.content, suffix, node.var_maps), alternative)
+        elif node.kind == OPERATOR and node.is_forall_dummy:
+            self.forall(node, parent, alternative, suffix)
+        elif node.kind == OPERATOR and node.inner:
+            op = self.op_node(node, parent or "root")
+            self.link(parent, op, alternative)
+            self.children(node, op, suffix)
+        else:
+            self.refined_goal(node, parent, alternative, suffix)
+
+    def children(self, node: RatNode, below: str, suffix: str) -> None:
+        for c in node.children:
+            self.visit(c, below, node.or_decomposition, suffix)
+
+    def task(self, node: RatNode, parent: str | None, alternative: bool) -> None:
+        """A task instance; greyed out when the Task Graph does not have it."""
+        lines = _task_lines(node.content, self.instances.get(node.content))
+        node_id = self.dot.unique(node.content)
+        if self.kept is not None and node.content not in self.kept:
+            # a false condition context that nothing enables removed this branch
+            lines.append("removed: context is false")
+            self.dot.node(node_id, shape="box", label=_label(lines), fontcolor="#666666",
+                          **_filled(("#eeeeee", "#999999"), "filled,dashed"))
+        else:
+            self.dot.node(node_id, shape="box", label=_label(lines), **_filled(TASK_COLOURS))
+        self.link(parent, node_id, alternative)
+
+    def forall(self, node: RatNode, parent: str | None, alternative: bool, suffix: str) -> None:
+        """A forAll goal: a hub node over one instance box per iterated element."""
+        key = node.children[0].related_goal if node.children else None
+        if key is None:
             return
-        if node.kind == GOAL:
-            node_id = goal_node(node.related_goal or node.content, suffix, node.var_maps)
-            link(parent, node_id, alternative)
-            return
-        if node.kind == OPERATOR and node.is_forall_dummy:
-            key = node.children[0].related_goal if node.children else None
-            if key is None:
-                return
-            g = gm.node(key)
-            hub = goal_node(key, suffix, node.var_maps, hub=True)
-            link(parent, hub, alternative)
-            it = g.forall.iteration if g.forall is not None else ""
-            for i, copy in enumerate(node.children, start=1):
-                b = copy.var_maps.get(it)
-                inst_id = dot.unique(f"{g.id}{suffix}_{i}")
-                text = f"{it} = {_value(b.value)}" if b is not None else f"instance {i}"
-                dot.node(inst_id, shape="box", label=f"{g.id} instance {i}\n{text}",
-                         **_filled(INSTANCE_COLOURS, "rounded,dashed"))
-                dot.edge(hub, inst_id)
-                if copy.kind == OPERATOR:
-                    op = op_node(copy, inst_id)
-                    dot.edge(inst_id, op)
-                    for c in copy.children:
-                        visit(c, op, copy.or_decomposition, f"{suffix}_{i}")
-                else:
-                    for c in copy.children:
-                        visit(c, inst_id, copy.or_decomposition, f"{suffix}_{i}")
-            return
-        if node.kind == OPERATOR and node.inner:
-            op = op_node(node, parent or "root")
-            link(parent, op, alternative)
-            for c in node.children:
-                visit(c, op, node.or_decomposition, suffix)
-            return
-        # a goal: a means-end goal (one child) or a goal whose annotation is an operator
-        key = node.related_goal or node.content
-        gid = goal_node(key, suffix, node.var_maps)
-        link(parent, gid, alternative)
+        g = self.gm.node(key)
+        hub = self.goal_node(key, suffix, node.var_maps, hub=True)
+        self.link(parent, hub, alternative)
+        it = g.forall.iteration if g.forall is not None else ""
+        for i, copy in enumerate(node.children, start=1):
+            self.forall_instance(g.id, hub, copy, i, it, f"{suffix}_{i}")
+
+    def forall_instance(self, goal_id: str, hub: str, copy: RatNode, i: int, it: str, suffix: str) -> None:
+        """Instance ``i`` of a forAll goal, labelled with its element, and its subtree."""
+        b = copy.var_maps.get(it)
+        inst_id = self.dot.unique(f"{goal_id}{suffix}")
+        text = f"{it} = {_value(b.value)}" if b is not None else f"instance {i}"
+        self.dot.node(inst_id, shape="box", label=f"{goal_id} instance {i}\n{text}",
+                      **_filled(INSTANCE_COLOURS, "rounded,dashed"))
+        self.dot.edge(hub, inst_id)
+        below = inst_id
+        if copy.kind == OPERATOR:
+            below = self.op_node(copy, inst_id)
+            self.dot.edge(inst_id, below)
+        self.children(copy, below, suffix)
+
+    def refined_goal(self, node: RatNode, parent: str | None, alternative: bool, suffix: str) -> None:
+        """A means-end goal (one child) or a goal whose annotation is an operator."""
+        gid = self.goal_node(node.related_goal or node.content, suffix, node.var_maps)
+        self.link(parent, gid, alternative)
         below = gid
         if node.kind == OPERATOR:
-            below = op_node(node, gid)
-            dot.edge(gid, below)
-        for c in node.children:
-            visit(c, below, node.or_decomposition, suffix)
-
-    visit(exp.rat, None, False, "")
-    return dot.text()
+            below = self.op_node(node, gid)
+            self.dot.edge(gid, below)
+        self.children(node, below, suffix)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -366,6 +418,15 @@ def _flags_text(group: bool, divisible: bool) -> str:
 def _constraining_flag(group: bool, divisible: bool) -> str:
     """How a goal constrains its tasks: ``Group=False`` or ``Divisible=False``."""
     return "Group=False" if not group else "Divisible=False"
+
+
+# how the AND, OR and CD edges of the Task Graph are drawn (EC edges: see _task_graph_edge)
+_EDGE_ATTRS: dict[EdgeKind, dict[str, object]] = {
+    EdgeKind.AND: {},
+    EdgeKind.OR: {"style": "dashed"},
+    EdgeKind.CD: {"style": "dotted", "color": CD_COLOUR, "fontcolor": CD_COLOUR, "label": "CD",
+                  "constraint": False, "penwidth": "1.5"},
+}
 
 
 def task_graph_dot(mission: "Mission", rankdir: str = "LR") -> str:
@@ -388,46 +449,52 @@ def task_graph_dot(mission: "Mission", rankdir: str = "LR") -> str:
         else:
             ids[v.index] = dot.unique(f"v{v.index}")
     for v in tg.vertices:
-        nid = ids[v.index]
-        if isinstance(v, OperatorVertex):
-            symbol = "OR" if tg.is_or(v.index) else v.content
-            lines = [f"{symbol}  {v.goal or ''}".rstrip()]
-            if v.forall:
-                lines.append("forAll")
-            elif v.achieve:
-                lines.append("achieve")
-            if not v.group or not v.divisible:
-                lines.append(_constraining_flag(v.group, v.divisible))
-            dot.node(nid, shape="ellipse", label=_label(lines), margin="0.05,0.02", height="0.3",
-                     **_filled(OPERATOR_COLOURS))
-        elif isinstance(v, GoalVertex):
-            lines = [v.content]
-            if not v.group or not v.divisible:
-                lines.append(_constraining_flag(v.group, v.divisible))
-            dot.node(nid, shape="box", label=_label(lines), **_filled(GOAL_COLOURS, "rounded,filled"))
-        elif isinstance(v, TaskVertex):
-            dot.node(nid, shape="box", label=_label(_task_lines(v.content, v.instance)), **_filled(TASK_COLOURS))
-        else:
-            lines = [f"{keys.get(v.index, '')}  {v.content}".strip()]
-            actions = [s.name for s in v.decomposition.path.actions]
-            lines += actions or ["(no action)"]
-            dot.node(nid, shape="box", label=_label(lines), fontsize="8", margin="0.05,0.03", height="0.2",
-                     **_filled(DECOMPOSITION_COLOURS))
-    for a, b, kind, group, divisible in tg.edges():
-        if kind == EdgeKind.AND:
-            dot.edge(ids[a], ids[b])
-        elif kind == EdgeKind.OR:
-            dot.edge(ids[a], ids[b], style="dashed")
-        elif kind == EdgeKind.CD:
-            dot.edge(ids[a], ids[b], style="dotted", color=CD_COLOUR, fontcolor=CD_COLOUR, label="CD",
-                     constraint=False, penwidth="1.5")
-        elif kind == EdgeKind.EC:
-            if tg.has_edge(b, a) and b < a:
-                continue  # EC edges come in pairs: draw each once
-            dot.edge(ids[a], ids[b], dir="none", color=EC_COLOUR, fontcolor=EC_COLOUR, constraint=False,
-                     label="EC " + _flags_text(group, divisible),
-                     penwidth="1.5")
+        _task_graph_node(dot, ids[v.index], v, tg, keys)
+    for edge in tg.edges():
+        _task_graph_edge(dot, tg, ids, edge)
     return dot.text()
+
+
+def _task_graph_node(dot: _Dot, nid: str, v: "Vertex", tg: "TaskGraph", keys: Mapping[int, str]) -> None:
+    """One vertex of the Task Graph, drawn by its kind."""
+    if isinstance(v, OperatorVertex):
+        symbol = "OR" if tg.is_or(v.index) else v.content
+        lines = [f"{symbol}  {v.goal or ''}".rstrip()]
+        if v.forall:
+            lines.append("forAll")
+        elif v.achieve:
+            lines.append("achieve")
+        lines += _constraining_flags(v.group, v.divisible)
+        dot.node(nid, shape="ellipse", label=_label(lines), margin="0.05,0.02", height="0.3",
+                 **_filled(OPERATOR_COLOURS))
+    elif isinstance(v, GoalVertex):
+        lines = [v.content] + _constraining_flags(v.group, v.divisible)
+        dot.node(nid, shape="box", label=_label(lines), **_filled(GOAL_COLOURS, "rounded,filled"))
+    elif isinstance(v, TaskVertex):
+        dot.node(nid, shape="box", label=_label(_task_lines(v.content, v.instance)), **_filled(TASK_COLOURS))
+    else:
+        lines = [f"{keys.get(v.index, '')}  {v.content}".strip()]
+        actions = [s.name for s in v.decomposition.path.actions]
+        lines += actions or ["(no action)"]
+        dot.node(nid, shape="box", label=_label(lines), fontsize="8", margin="0.05,0.03", height="0.2",
+                 **_filled(DECOMPOSITION_COLOURS))
+
+
+def _constraining_flags(group: bool, divisible: bool) -> list[str]:
+    """The label line of a vertex whose goal constrains its tasks; none for the default."""
+    return [] if group and divisible else [_constraining_flag(group, divisible)]
+
+
+def _task_graph_edge(dot: _Dot, tg: "TaskGraph", ids: Mapping[int, str], edge: "Edge") -> None:
+    """One edge of the Task Graph; an EC edge, which the graph holds in both directions, is
+    drawn once, from its lower vertex."""
+    a, b = edge.source, edge.target
+    if edge.kind != EdgeKind.EC:
+        dot.edge(ids[a], ids[b], **_EDGE_ATTRS[edge.kind])
+    elif not (tg.has_edge(b, a) and b < a):
+        dot.edge(ids[a], ids[b], dir="none", color=EC_COLOUR, fontcolor=EC_COLOUR, constraint=False,
+                 label="EC " + _flags_text(edge.group, edge.divisible),
+                 penwidth="1.5")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -457,16 +524,18 @@ def _nth(mission: "Mission", index: int) -> tuple[list[int], int, int]:
                            f"mission decompositions (indices 0 to {total - 1})")
     if index < 0:
         index += total
-    comps = space.components
-    if any(c.solutions is None for c in comps):
-        raise MissionError("a component of the decomposition space has too many solutions to list")
+    listed = [c.solutions for c in space.components]
     digits = []
     rest = index
-    for c in reversed(comps):
+    for c in reversed(space.components):
         rest, d = divmod(rest, c.count)
         digits.append(d)
     digits.reverse()
-    parts = [c.solutions[d] for c, d in zip(comps, digits)]  # type: ignore[index]
+    parts = []
+    for solutions, d in zip(listed, digits):
+        if solutions is None:
+            raise MissionError("a component of the decomposition space has too many solutions to list")
+        parts.append(solutions[d])
     decs = [space.var_to_dec[v] for p in parts for v in p] + list(space.fixed)
     return sorted(decs), index, total
 
@@ -491,67 +560,88 @@ def decomposition_dot(mission: "Mission", index: int = 0, rankdir: str = "LR") -
     dot = _new_graph("mission_decomposition", rankdir, title, nodesep="0.25", ranksep="0.5")
     ids = {d: dot.unique(tg.vertices[d].content) for d in chosen}
 
-    def node(d: int, indent: int) -> None:
-        v = tg.vertices[d]
-        dec = v.decomposition
-        inst = v.instance
-        lines = [f"{keys.get(d, '')}  {v.content}".strip()]
-        if inst is not None:
-            where = f" at {_value(inst.location)}" if inst.location is not None else ""
-            lines.append(f"{inst.name}{where}")
-            robots = _robots(inst)
-            if robots:
-                lines.append(robots)
-        binding = inst.binding if inst is not None else {}
-        acts = [f"{i}. {_action_text(s, binding)}" for i, s in enumerate(dec.path.actions, 1)] if dec else []
-        dot.node(ids[d], indent, shape="box", label=_left_label(lines, acts),
-                 **_filled(TASK_COLOURS, "rounded,filled"))
+    def node(d: int) -> None:
+        _decomposition_node(dot, ids[d], tg.decomposition(d), keys.get(d, ""))
 
-    # group by the forAll element when the root is a forAll operator
-    root = tg.vertices[0] if tg.vertices else None
-    groups: dict[int, list[int]] = {}
-    if isinstance(root, OperatorVertex) and root.forall and not tg.unique_branch:
-        top = {u: i for i, u in enumerate(tg.children(0))}
-        for d in chosen:
-            a = d
-            while a != -1 and a not in top:
-                a = tg.vertices[a].parent
-            groups.setdefault(a, []).append(d)
-    if groups and all(g != -1 for g in groups):
-        goal = mission.goal_model.node(root.goal) if isinstance(root, OperatorVertex) and root.goal else None
-        it = goal.forall.iteration if goal is not None and goal.forall is not None else None
+    groups = _forall_groups(tg, chosen)
+    if groups is not None:
+        it = _forall_iteration(mission)
         ordered = list(enumerate(sorted(groups.items(), key=lambda kv: kv[0]), start=1))
         if rankdir == "LR":
             ordered.reverse()  # dot stacks LR clusters bottom-up: emit the last first, so #1 is on top
         for n, (top_vertex, members) in ordered:
-            b = tg.vertices[top_vertex].var_maps.get(it) if it else None
-            title = f"{it} = {_value(b.value)}" if b is not None else f"forAll element {n}"
-            dot.raw(f"subgraph {_quote(f'cluster_{n}')} {{")
-            dot.raw(f'label={_quote(title)}; style="rounded,dashed"; color="{FORALL_COLOURS[1]}";', 2)
-            for d in members:
-                node(d, 2)
-            dot.raw("}")
+            top = tg.vertices[top_vertex]
+            b = top.var_maps.get(it) if it and isinstance(top, ScopeVertex) else None
+            label = f"{it} = {_value(b.value)}" if b is not None else f"forAll element {n}"
+            with dot.cluster(f"cluster_{n}", label, FORALL_COLOURS[1]):
+                for d in members:
+                    node(d)
     else:
         for d in chosen:
-            node(d, 1)
-    members = set(chosen)
+            node(d)
+    _constraint_edges(dot, mission.constraints, ids)
+    return dot.text()
+
+
+def _decomposition_node(dot: _Dot, node_id: str, v: "DecompositionVertex", key: str) -> None:
+    """A chosen task decomposition: key, id, task, location, robots and numbered actions."""
+    inst = v.instance
+    lines = [f"{key}  {v.content}".strip()]
+    where = f" at {_value(inst.location)}" if inst.location is not None else ""
+    lines.append(f"{inst.name}{where}")
+    robots = _robots(inst)
+    if robots:
+        lines.append(robots)
+    binding = inst.binding
+    acts = [f"{i}. {_action_text(s, binding)}" for i, s in enumerate(v.decomposition.path.actions, 1)]
+    dot.node(node_id, shape="box", label=_left_label(lines, acts), **_filled(TASK_COLOURS, "rounded,filled"))
+
+
+def _forall_groups(tg: "TaskGraph", chosen: list[int]) -> dict[int, list[int]] | None:
+    """The chosen decompositions by the child of the root they lie under, when the root is a
+    forAll operator over several elements (one group per element); ``None`` otherwise, or when
+    some decomposition is not below a child of the root."""
+    root = tg.vertices[0] if tg.vertices else None
+    if not (isinstance(root, OperatorVertex) and root.forall and not tg.unique_branch):
+        return None
+    top = {u: i for i, u in enumerate(tg.children(0))}
+    groups: dict[int, list[int]] = {}
+    for d in chosen:
+        a = d
+        while a != -1 and a not in top:
+            a = tg.vertices[a].parent
+        groups.setdefault(a, []).append(d)
+    if not groups or any(g == -1 for g in groups):
+        return None
+    return groups
+
+
+def _forall_iteration(mission: "Mission") -> str | None:
+    """The iteration variable of the forAll goal at the root of the Task Graph, if known."""
+    root = mission.task_graph.vertices[0]
+    goal = mission.goal_model.node(root.goal) if isinstance(root, OperatorVertex) and root.goal else None
+    return goal.forall.iteration if goal is not None and goal.forall is not None else None
+
+
+def _constraint_edges(dot: _Dot, constraints: Iterable["Constraint"], ids: Mapping[int, str]) -> None:
+    """The SEQ, FB and EC constraints among the drawn decompositions; an EC constraint, which
+    is listed in both directions, is drawn once."""
     drawn: set[tuple[int, int]] = set()
-    for c in mission.constraints:
-        if c.first not in members or c.second not in members:
+    for c in constraints:
+        if c.first not in ids or c.second not in ids:
             continue
-        a, b = ids[c.first], ids[c.second]
+        first, second = ids[c.first], ids[c.second]
         if c.kind == SEQ:
-            dot.edge(a, b, label="SEQ")
+            dot.edge(first, second, label="SEQ")
         elif c.kind == FB:
-            dot.edge(a, b, label="FB", style="dashed", color=FB_COLOUR, fontcolor=FB_COLOUR)
+            dot.edge(first, second, label="FB", style="dashed", color=FB_COLOUR, fontcolor=FB_COLOUR)
         elif c.kind == EC:
             pair = (min(c.first, c.second), max(c.first, c.second))
             if pair in drawn:
                 continue
             drawn.add(pair)
-            dot.edge(a, b, dir="none", color=EC_COLOUR, fontcolor=EC_COLOUR, constraint=False, penwidth="1.5",
-                     label="EC " + _flags_text(c.group, c.divisible))
-    return dot.text()
+            dot.edge(first, second, dir="none", color=EC_COLOUR, fontcolor=EC_COLOUR, constraint=False,
+                     penwidth="1.5", label="EC " + _flags_text(c.group, c.divisible))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -581,7 +671,7 @@ INSTALL_HINT = ("install Graphviz to render pictures (Debian/Ubuntu: apt-get ins
                 "macOS: brew install graphviz; https://graphviz.org/download/)")
 
 
-def render(dot_text: str, path: str | os.PathLike, *, timeout: float | None = 300) -> RenderResult:
+def render(dot_text: str, path: str | os.PathLike[str], *, timeout: float | None = 300) -> RenderResult:
     """Write ``dot_text`` to ``path``: as is for ``.dot``/``.gv``; for ``.svg``/``.png``/``.pdf``
     through the Graphviz ``dot`` program.  If ``dot`` is not on ``PATH``, the DOT text is written
     next to ``path`` with the suffix ``.dot`` and the result carries a message telling the user

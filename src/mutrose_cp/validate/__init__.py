@@ -31,12 +31,13 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 
-from ..io.decomposition_output import DecompositionOutput, OutputTask
+from ..io.decomposition_output import DecompositionOutput, OutputTask, RobotsNum
 from ..model import (
     Annotation,
     AnnotationLeaf,
     Atom,
     BoolOp,
+    Comparison,
     Condition,
     Configuration,
     Domain,
@@ -44,10 +45,12 @@ from ..model import (
     GoalModel,
     InitialState,
     Literal,
+    NumericEffect,
 )
 from .htn_match import Matcher, Step
 
 AtomKey = tuple[str, tuple[str, ...]]
+_BindingKey = tuple[tuple[str, tuple[str, ...]], ...]  # sorted (variable, values) pairs
 EPSILON = 1e-9
 
 
@@ -154,6 +157,76 @@ def _groundings(args: tuple[str, ...], values: dict[str, tuple[str, ...]]) -> li
 
 
 # ---------------------------------------------------------------------------------------------
+# Replay of one explanation of a task
+
+
+class _StepReplay:
+    """Replays the steps of one explanation of a task from the state where the task starts,
+    over every grounding of their arguments: preconditions are checked against what the task
+    changed so far, else the start state, else what it assumed (an atom nothing knows is
+    assumed as first required); effects are recorded."""
+
+    def __init__(self, values: dict[str, tuple[str, ...]], start: State) -> None:
+        self.values = values
+        self.start = start
+        self.changed = TaskEffects()
+        self.facts: dict[AtomKey, bool] = {}  # changed facts
+        self.assumed: dict[AtomKey, bool] = {}
+        self.nums: dict[AtomKey, float | None] = {}  # function values known or changed here
+        self.failures: list[str] = []
+
+    def step(self, step: Step) -> None:
+        what = f"{step.kind} {step.name}"
+        for c in step.preconditions:
+            for g in _groundings(c.args, self.values):
+                if isinstance(c, Literal):
+                    self._literal(c, g, what, step.position)
+                else:
+                    self._comparison(c, g, what, step.position)
+        for e in step.effects:
+            for g in _groundings(e.args, self.values):
+                self.facts[(e.predicate, g)] = e.positive
+                self.changed.facts[(e.predicate, g)] = e.positive
+        for n in step.numeric_effects:
+            for g in _groundings(n.args, self.values):
+                self._numeric_effect(n, (n.function, g))
+
+    def _value(self, key: AtomKey) -> float | None:
+        return self.nums[key] if key in self.nums else self.start.values.get(key)
+
+    def _literal(self, c: Literal, g: tuple[str, ...], what: str, position: int) -> None:
+        key = (c.predicate, g)
+        known = self.facts.get(key, self.start.facts.get(key, self.assumed.get(key)))
+        if known is None:
+            self.assumed[key] = c.positive
+        elif known != c.positive:
+            self.failures.append(f"precondition {_show_literal(c.predicate, g, c.positive)} of {what} "
+                                 f"(action {position + 1}) does not hold")
+
+    def _comparison(self, c: Comparison, g: tuple[str, ...], what: str, position: int) -> None:
+        """A numeric precondition; an unknown value is taken from a required equality."""
+        key = (c.function, g)
+        value = self._value(key)
+        if value is None:
+            if c.op == "=" and not c.negated:
+                self.nums[key] = float(c.value)
+            return
+        if _compare(value, c.op, float(c.value)) == c.negated:
+            self.failures.append(f"precondition {'not ' if c.negated else ''}{c.function}"
+                                 f"({', '.join(g)}) {c.op} {c.value:g} of {what} (action "
+                                 f"{position + 1}) does not hold: the value is {value:g}")
+
+    def _numeric_effect(self, n: NumericEffect, key: AtomKey) -> None:
+        """An assignment sets the value; an increase or decrease changes a known value only."""
+        old = self._value(key)
+        if n.kind == "assign":
+            self.nums[key] = float(n.amount)
+        elif old is not None:
+            self.nums[key] = old + (n.amount if n.kind == "increase" else -n.amount)
+        self.changed.numeric.append((key, n.kind, float(n.amount)))
+
+
+# ---------------------------------------------------------------------------------------------
 # The validator
 
 
@@ -167,8 +240,8 @@ class _Validator:
         self.w0 = State.initial(initial)
         self.report = Report()
         self.order = {k: i for i, k in enumerate(output.tasks)}
-        self.seq = nx.DiGraph()
-        self.seq_fb = nx.DiGraph()
+        self.seq: nx.DiGraph[str] = nx.DiGraph()
+        self.seq_fb: nx.DiGraph[str] = nx.DiGraph()
         self.seq.add_nodes_from(output.tasks)
         self.seq_fb.add_nodes_from(output.tasks)
         self.ec: list[tuple[str, str]] = []
@@ -275,13 +348,10 @@ class _Validator:
     def _or_goal(self, i: int, goal: GMNode, chosen: set[str], errors: list[Violation]) -> None:
         """One branch of an OR goal per instance (instances of one forAll element share their
         number): at most one, and at least one where the goal is required."""
-        for branch in goal.children:
-            for t in self._branch_tasks(branch):
-                between = self.gm_task_path.get(t, [])[: self._depth_below(t, goal)]
-                if any(n.forall is not None for n in between):
-                    self._note(f"goal {goal.id}: an OR branch holds its own forAll; its choices per element "
-                               "are not checked")
-                    return
+        if self._or_branch_has_forall(goal):
+            self._note(f"goal {goal.id}: an OR branch holds its own forAll; its choices per element "
+                       "are not checked")
+            return
         by_number: dict[str, set[str]] = {}
         for branch in goal.children:
             tasks = set(self._branch_tasks(branch))
@@ -295,15 +365,31 @@ class _Validator:
                                                     f"({', '.join(sorted(branches))}) for instance _{number}"))
         # at least one: for every instance that has tasks in the file in every branch (a branch
         # without tasks may be the one chosen) and that the decomposition needs
+        for number, branches in sorted(self._branches_in_file(goal).items()):
+            if number not in by_number and len(branches) == len(goal.children) and self._or_needed(goal, number, chosen):
+                errors.append(Violation(i, goal.id, f"OR goal {goal.id} has no chosen branch for instance _{number}"))
+
+    def _or_branch_has_forall(self, goal: GMNode) -> bool:
+        """Whether some task below an OR goal is under a forAll between it and the goal: its
+        instances per element are numbered beyond the OR goal's, which this check does not
+        follow."""
+        for branch in goal.children:
+            for t in self._branch_tasks(branch):
+                between = self.gm_task_path.get(t, [])[: self._depth_below(t, goal)]
+                if any(n.forall is not None for n in between):
+                    return True
+        return False
+
+    def _branches_in_file(self, goal: GMNode) -> dict[str, set[str]]:
+        """Instance number -> the branches of an OR goal that have a task of that instance
+        anywhere in the file (in any mission decomposition)."""
         present: dict[str, set[str]] = {}
         for branch in goal.children:
             tasks = set(self._branch_tasks(branch))
-            for t in self.out.tasks.values():
-                if t.gm_task in tasks:
-                    present.setdefault(t.instance.partition("_")[2], set()).add(branch)
-        for number, branches in sorted(present.items()):
-            if number not in by_number and len(branches) == len(goal.children) and self._or_needed(goal, number, chosen):
-                errors.append(Violation(i, goal.id, f"OR goal {goal.id} has no chosen branch for instance _{number}"))
+            for task in self.out.tasks.values():
+                if task.gm_task in tasks:
+                    present.setdefault(task.instance.partition("_")[2], set()).add(branch)
+        return present
 
     def _or_needed(self, goal: GMNode, number: str, chosen: set[str]) -> bool:
         """Whether a decomposition must choose a branch of ``goal`` for instance ``number``: when
@@ -424,48 +510,10 @@ class _Validator:
 
     def _run_steps(self, steps: list[Step], values: dict[str, tuple[str, ...]], start: State) -> tuple[TaskEffects, list[str]]:
         """Replay one explanation; unknown atoms are assumed when first required."""
-        changed = TaskEffects()
-        facts: dict[AtomKey, bool] = {}  # changed facts
-        assumed: dict[AtomKey, bool] = {}
-        nums: dict[AtomKey, float | None] = {}
-        failures: list[str] = []
+        replay = _StepReplay(values, start)
         for step in steps:
-            what = f"{step.kind} {step.name}"
-            for c in step.preconditions:
-                for g in _groundings(c.args, values):
-                    if isinstance(c, Literal):
-                        key = (c.predicate, g)
-                        known = facts.get(key, start.facts.get(key, assumed.get(key)))
-                        if known is None:
-                            assumed[key] = c.positive
-                        elif known != c.positive:
-                            failures.append(f"precondition {_show_literal(c.predicate, g, c.positive)} of {what} "
-                                            f"(action {step.position + 1}) does not hold")
-                    else:
-                        key = (c.function, g)
-                        value = nums[key] if key in nums else start.values.get(key)
-                        if value is None:
-                            if c.op == "=" and not c.negated:
-                                nums[key] = float(c.value)
-                            continue
-                        if _compare(value, c.op, float(c.value)) == c.negated:
-                            failures.append(f"precondition {'not ' if c.negated else ''}{c.function}"
-                                            f"({', '.join(g)}) {c.op} {c.value:g} of {what} (action "
-                                            f"{step.position + 1}) does not hold: the value is {value:g}")
-            for e in step.effects:
-                for g in _groundings(e.args, values):
-                    facts[(e.predicate, g)] = e.positive
-                    changed.facts[(e.predicate, g)] = e.positive
-            for n in step.numeric_effects:
-                for g in _groundings(n.args, values):
-                    key = (n.function, g)
-                    old = nums[key] if key in nums else start.values.get(key)
-                    if n.kind == "assign":
-                        nums[key] = float(n.amount)
-                    elif old is not None:
-                        nums[key] = old + (n.amount if n.kind == "increase" else -n.amount)
-                    changed.numeric.append((key, n.kind, float(n.amount)))
-        return changed, failures
+            replay.step(step)
+        return replay.changed, replay.failures
 
     # -- parallel conflicts ------------------------------------------------------------------------
     def _conflicts(self, i: int, keys: list[str], errors: list[Violation]) -> None:
@@ -539,9 +587,9 @@ class _Validator:
                       chosen: set[str], errors: list[Violation], group_by: str | None = None) -> None:
         """Evaluate ``cond`` after the goal's tasks, once per binding of its variables."""
         names = _variables(cond) | ({group_by} if group_by else set())
-        groups: dict[tuple, list[OutputTask]] = {}
+        groups: dict[_BindingKey, list[OutputTask]] = {}
         unbound: list[OutputTask] = []
-        numbers: dict[str, tuple] = {}  # instance number -> group of the tasks that bind the names
+        numbers: dict[str, _BindingKey] = {}  # instance number -> group of the tasks that bind the names
         for t in below:
             b = self._binding(t)
             if not names <= b.keys():
@@ -555,9 +603,9 @@ class _Validator:
                        "(Location or var_mapping): not checked")
             return
         for t in unbound:  # a task of the same forAll element (same instance number) joins its group
-            key = numbers.get(t.instance.partition("_")[2])
-            if key is not None:
-                groups[key].append(t)
+            joined = numbers.get(t.instance.partition("_")[2])
+            if joined is not None:
+                groups[joined].append(t)
         for key, members in groups.items():
             keys = [t.key for t in members]
             state = self._state_before(keys, chosen)
@@ -651,7 +699,7 @@ def _show_condition(cond: Condition) -> str:
     return cond.text
 
 
-def _show_robots(r) -> str:
+def _show_robots(r: RobotsNum) -> str:
     return str(r.min) if r.fixed else f"[{r.min},{r.max}]"
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from typing import Iterator, Sequence
+from typing import Iterable, Iterator, Sequence
 
 from ..io.decomposition_output import OutputAction
 from ..model import Comparison, Domain, Literal, Method, NumericEffect
@@ -41,7 +41,8 @@ def _rename(args: Sequence[str], subst: dict[str, str]) -> tuple[str, ...]:
     return tuple(subst.get(a, a) for a in args)
 
 
-def _renamed(kind: str, name: str, pre, eff, num, subst: dict[str, str], position: int) -> Step:
+def _renamed(kind: str, name: str, pre: Iterable[Literal | Comparison], eff: Iterable[Literal],
+             num: Iterable[NumericEffect], subst: dict[str, str], position: int) -> Step:
     return Step(
         kind,
         name,
