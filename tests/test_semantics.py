@@ -269,8 +269,10 @@ def test_robot_preconditions_are_written_by_partners_effects_renamed(tmp_path):
     (pick,) = g.task("AT1_1", par, pick_effects, task_name="Pick")
     (drop,) = g.task("AT2_1", par, drop_needs, task_name="Drop")
     tg = g.freeze()
-    (written,) = robot_precondition_writers(domain, tg, drop, [pick])
+    index = ConstraintIndex.of([Constraint(EC, pick, drop)])
+    position = {v: i for i, v in enumerate(mission_queue(tg))}
+    (written,) = robot_precondition_writers(domain, tg, drop, index, position)
     precondition, writers = written
     assert precondition == Literal("holding", ("?s",), True)
     assert writers == [(pick, True)]  # pick's (holding ?r) renamed onto drop's ?s
-    assert robot_precondition_writers(domain, tg, pick, []) == []
+    assert robot_precondition_writers(domain, tg, pick, index, position) == []  # no partner before it

@@ -62,9 +62,9 @@ def _pairs(kind: ConstraintKind, x: _Child, y: _Child) -> list[tuple[int, int]]:
     """Endpoint pairs generated between two children of a SEQ, FB or PAR node (§6.1): every way
     out of each constraint of ``x`` joined to every way into each constraint of ``y`` (a task is
     its own way in and out)."""
-    left = [x] if isinstance(x, int) else x
-    right = [y] if isinstance(y, int) else y
-    return [(e, n) for l in left for r in right for e in _exits(kind, l) for n in _entries(kind, r)]
+    exits = [_exits(kind, l) for l in ([x] if isinstance(x, int) else x)]
+    entries = [_entries(kind, r) for r in ([y] if isinstance(y, int) else y)]
+    return [(e, n) for out in exits for into in entries for e in out for n in into]
 
 
 def _combinations(kind: ConstraintKind, children: int, pairs_needed: bool) -> list[tuple[int, int]]:
@@ -93,21 +93,25 @@ def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constra
             children.append(u)
         elif isinstance(ux, OperatorVertex):
             children.append(_tree_constraints(tg, u, pairs_needed or kind != PAR))
-    own = [Constraint(kind, *p) for i, j in _combinations(kind, len(children), pairs_needed)
-           for p in _pairs(kind, children[i], children[j])]
-    inherited = [k for c in children if isinstance(c, list) for k in c]
-    return _first_per_pair(own + inherited)
+    own = [p for i, j in _combinations(kind, len(children), pairs_needed) for p in _pairs(kind, children[i], children[j])]
+    return _first_per_pair(kind, own, [c for c in children if isinstance(c, list)])
 
 
-def _first_per_pair(constraints: list[Constraint]) -> list[Constraint]:
-    """The constraints in order, keeping the first for each (first, second) pair: the node's own
-    links win over those of its subtrees."""
+def _first_per_pair(kind: ConstraintKind, own: list[tuple[int, int]],
+                    inherited: list[list[Constraint]]) -> list[Constraint]:
+    """The node's own links, then its subtrees' constraints, keeping the first for each
+    (first, second) pair: the node's own links win over those of its subtrees."""
     seen: set[tuple[int, int]] = set()
     out: list[Constraint] = []
-    for c in constraints:
-        if (c.first, c.second) not in seen:
-            seen.add((c.first, c.second))
-            out.append(c)
+    for p in own:
+        if p not in seen:
+            seen.add(p)
+            out.append(Constraint(kind, *p))
+    for constraints in inherited:
+        for c in constraints:
+            if (c.first, c.second) not in seen:
+                seen.add((c.first, c.second))
+                out.append(c)
     return out
 
 
@@ -173,11 +177,11 @@ def _drop_implied(constraints: list[Constraint]) -> list[Constraint]:
 
 def _check_robot_numbers(tg: TaskGraph, constraints: list[Constraint]) -> None:
     """§6.5: execution-constrained decompositions need compatible robot numbers."""
+    instance = {d.index: d.decomposition.instance for d in tg.decompositions()}
     for c in constraints:
         if c.kind != EC:
             continue
-        a = tg.decomposition(c.first).instance
-        b = tg.decomposition(c.second).instance
+        a, b = instance[c.first], instance[c.second]
         ra, rb = a.robot_number, b.robot_number
         if ra.fixed and rb.fixed:
             ok = ra.min == rb.min
@@ -200,7 +204,7 @@ def generate_constraints(tg: TaskGraph) -> list[Constraint]:
         root = tg.vertices[0]
         if not isinstance(root, OperatorVertex):
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
-        has_cd = any(e.kind == EdgeKind.CD for e in tg.edges())
+        has_cd = tg.has_edges_of_kind(EdgeKind.CD)
         out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd))
     out += _execution_constraints(tg)
     out = _drop_implied(out)

@@ -44,6 +44,9 @@ class _Builder:
         self.tg = TaskGraphBuilder()
         self.instances = {i.id: i for i in exp.instances}
         self.cd_edges: list[tuple[int, int]] = []
+        # every enabled creation condition from a scope vertex up to the root, innermost first:
+        # a task below must meet them all where it starts
+        self.contexts_in_scope: dict[int, tuple[Test, ...]] = {}
 
     def build(self) -> TaskGraphBuilder:
         self._visit(self.exp.rat, None, None)
@@ -101,6 +104,7 @@ class _Builder:
         )
         self.tg.add(vertex)
         self.cd_edges.extend((d, vertex.index) for d in pending)
+        self.contexts_in_scope[vertex.index] = contexts + (self.contexts_in_scope[parent.index] if parent else ())
         return vertex
 
     def _add_task(self, node: RatNode, parent: ScopeVertex, edge: EdgeKind) -> None:
@@ -114,14 +118,9 @@ class _Builder:
                 "(tasks under a goal with Group=False are executed by one robot: set RobotNumber to 1)",
                 f"{self.gm.source}: task {inst.gm_task}",
             )
-        contexts: list[Test] = []
-        up = parent.index
-        while up >= 0:
-            contexts.extend(tg.scope(up).contexts)
-            up = tg.vertices[up].parent
         flags = {"group": parent.group, "divisible": parent.divisible}
         tv = tg.add(TaskVertex(index=tg.next_index, parent=parent.index, content=inst.id, instance=inst,
-                               contexts=tuple(contexts), **flags))
+                               contexts=self.contexts_in_scope[parent.index], **flags))
         tg.add_edge(parent.index, tv.index, edge)
         binding = inst.binding
         for n, path in enumerate(self.paths[inst.name], start=1):
@@ -249,9 +248,7 @@ class _ExecutionScopes:
         if self.active is None:
             return
         group, divisible = self.flags[self.active]
-        for t in sorted(self.tasks):
-            if not self.tg.has_edge(t, v):
-                self.tg.add_ec(t, v, group, divisible)
+        self.tg.add_ec_to_all(sorted(self.tasks), v, group, divisible)
         self.tasks.append(v)
 
 
@@ -315,7 +312,7 @@ class _Trimmer:
 
     def _insert(self, old: int, parent_old: int | None) -> None:
         parent = self.index[parent_old] if parent_old is not None else -1
-        vertex = replace(self.tg.vertices[old], index=self.new.next_index, parent=parent)
+        vertex = self.tg.vertices[old].moved(self.new.next_index, parent)
         self.new.add(vertex)
         self.index[old] = vertex.index
         if parent_old is not None:
@@ -326,7 +323,7 @@ class _Trimmer:
             if isinstance(self.tg.vertices[u], TaskVertex):
                 self._insert(u, under_old)
                 for d in self.tg.out(u, AND):
-                    nd = replace(self.tg.decomposition(d), index=self.new.next_index, parent=self.index[u])
+                    nd = self.tg.decomposition(d).moved(self.new.next_index, self.index[u])
                     self.new.add(nd)
                     self.index[d] = nd.index
                     self.new.add_edge(self.index[u], nd.index, AND)
@@ -358,9 +355,10 @@ class _Trimmer:
             for b, kind in tg.successors(a):
                 if kind == CD and b in index:
                     self.new.add_edge(index[a], index[b], CD)
-            for p in tg.ec_partners(a):  # each direction keeps its own order
-                if p.task in index:
-                    self.new.add_ec_direction(index[a], ExecutionPartner(index[p.task], p.group, p.divisible))
+            partners = tg.ec_partners(a)  # each direction keeps its own order
+            if partners:
+                self.new.add_ec_directions(index[a], (ExecutionPartner(index[p.task], p.group, p.divisible)
+                                                      for p in partners if p.task in index))
 
 
 def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,

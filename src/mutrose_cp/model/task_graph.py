@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import TYPE_CHECKING, ClassVar, Iterator, Mapping, NamedTuple, Sequence
+from typing import TYPE_CHECKING, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence
 
 if TYPE_CHECKING:  # the types of the stages that produce a vertex's content
     from ..conditions import Test
@@ -51,6 +51,14 @@ class _Vertex:
     content: str  # operator symbol, goal id, instance id or decomposition id
     group: bool = True
     divisible: bool = True
+
+    def moved(self, index: int, parent: int) -> Self:
+        """The same vertex at another position: trimming renumbers the graph.  (A direct copy:
+        ``dataclasses.replace`` re-runs ``__init__``, which cost a tenth of the build on large
+        missions.)"""
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__, index=index, parent=parent)
+        return new
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -156,6 +164,10 @@ class _Adjacency:
 
     def edge_kind(self, a: int, b: int) -> EdgeKind:
         return self._edges.kind[(a, b)]
+
+    def has_edges_of_kind(self, kind: EdgeKind) -> bool:
+        """Whether any edge has ``kind`` (AND, OR or CD; EC edges are kept apart)."""
+        return kind in set(self._edges.kind.values())
 
     def has_edge(self, a: int, b: int) -> bool:
         return (a, b) in self._edges.kind or (a, b) in self._edges.ec_pairs
@@ -263,10 +275,20 @@ class TaskGraphBuilder(_Adjacency):
         self._edges.ec_pairs.add((a, b))
         self._edges.ec_pairs.add((b, a))
 
-    def add_ec_direction(self, a: int, partner: ExecutionPartner) -> None:
-        """One direction of an execution constraint (trimming keeps each direction's order)."""
-        self._edges.ec.setdefault(a, []).append(partner)
-        self._edges.ec_pairs.add((a, partner.task))
+    def add_ec_to_all(self, tasks: Sequence[int], v: int, group: bool, divisible: bool) -> None:
+        """Execution constraints between task ``v`` and each of ``tasks`` it is not yet linked to,
+        in that order (one call for what is the bulk of a large mission's edges)."""
+        pairs = self._edges.ec_pairs
+        for t in tasks:
+            if (t, v) not in pairs and (t, v) not in self._edges.kind:
+                self.add_ec(t, v, group, divisible)
+
+    def add_ec_directions(self, a: int, partners: Iterator[ExecutionPartner]) -> None:
+        """One direction of execution constraints, in order (trimming keeps each direction's)."""
+        own = self._edges.ec.setdefault(a, [])
+        for partner in partners:
+            own.append(partner)
+            self._edges.ec_pairs.add((a, partner.task))
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,

@@ -34,7 +34,6 @@ from .semantics import (
     initial_state,
     mission_queue,
     parallel_conflicts,
-    robot_partners,
     robot_precondition_writers,
     unique_branch_valid,
 )
@@ -260,8 +259,7 @@ class Encoder:
         agree with it (an unknown robot fact holds)."""
         tg = self.tg
         dec = tg.decomposition(d).decomposition
-        partners = robot_partners(tg, self.index, d, self.queue_pos)
-        for lit, writers in robot_precondition_writers(self.domain, tg, d, partners):
+        for lit, writers in robot_precondition_writers(self.domain, tg, d, self.index, self.queue_pos):
             later: list[Lit] = []
             for e, value in reversed(writers):
                 if value != lit.positive:

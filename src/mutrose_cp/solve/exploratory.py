@@ -30,7 +30,6 @@ from .semantics import (
     initial_state,
     mission_queue,
     parallel_conflicts,
-    robot_partners,
     robot_precondition_writers,
     unique_branch_valid,
 )
@@ -70,7 +69,7 @@ class ExploratoryDecomposer:
         index = ConstraintIndex.of(constraints)
         position = {v: i for i, v in enumerate(self.queue)}
         self.robot_writers: dict[int, list[tuple[Literal, list[tuple[int, bool]]]]] = {
-            d.index: robot_precondition_writers(domain, tg, d.index, robot_partners(tg, index, d.index, position))
+            d.index: robot_precondition_writers(domain, tg, d.index, index, position)
             for d in tg.decompositions()} if not tg.unique_branch else {}
 
     # ------------------------------------------------------------------------------------------

@@ -383,10 +383,11 @@ def robot_partners(tg: TaskGraph, index: ConstraintIndex, d: int, queue_position
             if queue_position[tg.vertices[e].parent] < queue_position[task] and e not in after]
 
 
-def robot_precondition_writers(domain: Domain, tg: TaskGraph, d: int,
-                               partners: Iterable[int]) -> list[tuple[Literal, list[tuple[int, bool]]]]:
-    """Each robot-related precondition of ``d`` with the partners (in application order) whose
-    effects, renamed onto ``d``'s robot parameters, write it: (partner, value written).
+def robot_precondition_writers(domain: Domain, tg: TaskGraph, d: int, index: ConstraintIndex,
+                               queue_position: Mapping[int, int]) -> list[tuple[Literal, list[tuple[int, bool]]]]:
+    """Each robot-related precondition of ``d`` with the :func:`robot_partners` (in application
+    order) whose effects, renamed onto ``d``'s robot parameters, write it: (partner, value
+    written).
 
     An unknown robot fact holds; the value the last chosen writer gives must agree with the
     precondition.  Preconditions that no partner writes are left out."""
@@ -394,7 +395,8 @@ def robot_precondition_writers(domain: Domain, tg: TaskGraph, d: int,
     preconditions = robot_preconditions(domain, dec)
     if not preconditions:
         return []
-    translated = [(e, translate_robot_effects(domain, _decomposition(tg, e), dec)) for e in partners]
+    translated = [(e, translate_robot_effects(domain, _decomposition(tg, e), dec))
+                  for e in robot_partners(tg, index, d, queue_position)]
     out = []
     for lit in preconditions:
         writers = [(e, eff.positive) for e, effs in translated for eff in effs
