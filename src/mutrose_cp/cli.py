@@ -474,10 +474,6 @@ def _main(argv: Sequence[str] | None) -> int:
     if not getattr(args, "command", None):
         parser.print_help(sys.stderr)
         return 2
-    if args.command in ("decompose", "count"):
-        # load the solver before signals become exceptions: an exception raised inside a native
-        # module's initialisation aborts the process
-        import mutrose_cp.solve.cpsat  # noqa: F401
     try:
         with signal_handlers(), input_limit(args.max_input_mb * MB):
             status: int = args.func(args)

@@ -10,10 +10,12 @@ the signal is handled at once and the solver is told to stop (:mod:`mutrose_cp.s
 """
 from __future__ import annotations
 
+import importlib
 import os
 import signal
 import threading
 from contextlib import contextmanager
+from types import ModuleType
 from typing import Iterator
 
 FAULT_ENV = "MUTROSE_CP_FAULT"  # "<phase>:<INT|TERM>[:<delay seconds>]", used by the fault tests
@@ -50,6 +52,24 @@ def signal_handlers() -> Iterator[None]:
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
+
+
+@contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM back while the block runs; they are delivered when it ends.  For
+    work that must not be cut midway: a native module's initialisation (an exception raised
+    inside it aborts the process) and the stopping of a solver thread."""
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
+def native_import(name: str) -> ModuleType:
+    """Import the native module ``name`` with interrupts held back (see :func:`signals_held`)."""
+    with signals_held():
+        return importlib.import_module(name)
 
 
 def current_phase() -> str:

@@ -6,7 +6,8 @@ components' solutions, so the space is counted exactly as a product, streamed wi
 counter, sampled uniformly by sampling each component, and optimised component by component.
 Each component is solved by CP-SAT (``enumerate_all_solutions`` with one worker: with more
 workers solutions were lost or repeated); components that are a single exactly-one choice are
-read off directly.
+read off directly.  The CP-SAT layer (:mod:`.proto`, :mod:`.run`) is loaded on first use: small
+missions often need none.
 """
 from __future__ import annotations
 
@@ -16,8 +17,6 @@ import random
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable, Iterator, Sequence
-
-from ortools.sat.python import cp_model_helper as cmh
 
 from ..errors import MissionError
 from .boolean_model import (
@@ -36,8 +35,6 @@ from .boolean_model import (
 )
 from .encoding import Encoding
 
-from .proto import ProtoBuilder
-from .run import FEASIBLE, INFEASIBLE, OPTIMAL, run_solver
 
 ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
 
@@ -92,29 +89,6 @@ def _components(enc: Encoding) -> list[Component]:
     return constant + [groups[k] for k in sorted(groups)]
 
 
-class _Collector(cmh.SolutionCallback):
-    """Counts the solutions of an enumeration and keeps the chosen decomposition literals of
-    each, up to ``ENUMERATION_CAP`` (beyond it the component is counted only)."""
-
-    def __init__(self, variables: list[int], ids: list[int], keep: bool) -> None:
-        super().__init__()
-        self.variables = variables  # proto indices
-        self.ids = ids
-        self.keep = keep
-        self.solutions: list[frozenset[int]] = []
-        self.count = 0
-
-    def OnSolutionCallback(self) -> None:  # noqa: N802 - the helper module's callback name
-        self.count += 1
-        if self.keep:
-            if self.count > ENUMERATION_CAP:
-                self.keep = False
-                self.solutions = []
-                return
-            self.solutions.append(frozenset(i for v, i in zip(self.variables, self.ids)
-                                            if self.SolutionBooleanValue(v)))
-
-
 def _simple_choice(comp: Component) -> list[frozenset[int]] | None:
     """Solutions of a component that is one exactly-one choice plus unit exclusions."""
     sums = [r for r in comp.records if isinstance(r, Exactly)]
@@ -147,11 +121,14 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
         chosen = sorted((s & frozenset(comp.choice_vars) for s in simple), key=sorted)
         comp.solutions, comp.count = chosen, len(chosen)
         return
+    from .proto import ProtoBuilder  # the CP-SAT layer, loaded when a component needs it
+    from .run import INFEASIBLE, OPTIMAL, SolutionCollector, run_solver
+
     builder = ProtoBuilder(bm)
     for r in comp.records:
         builder.post(r)
     variables = [builder.var(v) for v in comp.choice_vars]
-    collector = _Collector(variables, comp.choice_vars, keep)
+    collector = SolutionCollector(variables, comp.choice_vars, keep, ENUMERATION_CAP)
     # an enumeration is complete only with OPTIMAL (every solution seen) or INFEASIBLE (none)
     run_solver(builder.proto, accept=(OPTIMAL, INFEASIBLE), callback=collector,
                enumerate_all=True, what="enumerating a component")
@@ -341,6 +318,9 @@ def build_space(enc: Encoding, keep: bool = True,
 
 def explain(enc: Encoding) -> list[str]:
     """Why no decomposition exists: a conflicting set of labelled constraints (CP-SAT assumptions)."""
+    from .proto import ProtoBuilder
+    from .run import FEASIBLE, INFEASIBLE, OPTIMAL, run_solver
+
     reasons: list[str] = []
     for comp in _components(enc):
         builder = ProtoBuilder(enc.model)

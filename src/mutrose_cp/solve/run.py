@@ -11,11 +11,15 @@ search early and report the partial enumeration as a normal status.
 """
 from __future__ import annotations
 
-import signal
 import threading
-from typing import Iterable
+from typing import TYPE_CHECKING, Iterable
 
-from ortools.sat.python import cp_model_helper as cmh
+from ..interrupt import native_import, signals_held
+
+if TYPE_CHECKING:
+    from ortools.sat.python import cp_model_helper as cmh
+else:  # loaded on first use, where an interrupt must not cut its initialisation
+    cmh = native_import("ortools.sat.python.cp_model_helper")
 
 from ..errors import MissionError
 
@@ -35,13 +39,10 @@ def _stop(solver: cmh.SolveWrapper, done: threading.Event) -> None:
     repeated until the worker ends, in case the search had not started when it was first asked.
     (The worker says when it is done: ``Thread.is_alive`` can turn false while CP-SAT still
     runs in it, once a solution callback has run on that thread.)"""
-    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-    try:
+    with signals_held():
         while not done.is_set():
             solver.stop_search()
             done.wait(0.05)
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def run_solver(model: cmh.CpModelProto, *, accept: Iterable[Status],
@@ -85,3 +86,28 @@ def run_solver(model: cmh.CpModelProto, *, accept: Iterable[Status],
         raise IncompleteSolveError(f"CP-SAT did not finish {what} ({response.status.name}): no result is "
                                    "reported from an unfinished search")
     return response
+
+
+class SolutionCollector(cmh.SolutionCallback):
+    """Counts the solutions of an enumeration and keeps, for each, which of ``variables``
+    (proto indices) are true, as the matching ``ids``; beyond ``cap`` solutions it stops
+    keeping them and only counts."""
+
+    def __init__(self, variables: list[int], ids: list[int], keep: bool, cap: int) -> None:
+        super().__init__()
+        self.variables = variables
+        self.ids = ids
+        self.keep = keep
+        self.cap = cap
+        self.solutions: list[frozenset[int]] = []
+        self.count = 0
+
+    def OnSolutionCallback(self) -> None:  # noqa: N802 - the helper module's callback name
+        self.count += 1
+        if self.keep:
+            if self.count > self.cap:
+                self.keep = False
+                self.solutions = []
+                return
+            self.solutions.append(frozenset(i for v, i in zip(self.variables, self.ids)
+                                            if self.SolutionBooleanValue(v)))
