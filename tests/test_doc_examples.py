@@ -30,3 +30,11 @@ def test_api_guide_examples_run(monkeypatch, capsys):
     every = [sum(per_decomposition[d] for d in ds) for ds in listed]
     assert printed[3].split(" ", 1)[0] == str(best.optimum[1]) == str(min(every))
     assert printed[4] == "3"
+
+
+def test_readme_example_runs(monkeypatch, capsys):
+    monkeypatch.chdir(ROOT)
+    (block,) = _python_blocks(ROOT / "README.md")
+    exec(compile(block, "README.md", "exec"), {})  # noqa: S102 - our own documentation
+    total, cost, chosen = capsys.readouterr().out.split(" ", 2)
+    assert total == "36" and int(cost) > 0 and chosen.startswith("['AT")
