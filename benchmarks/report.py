@@ -33,7 +33,7 @@ done about it:
   are pairwise execution-constrained: 0.8 million EC constraints at 5000 rooms. Building them as
   networkx edges and dataclasses, with Python's cyclic collector rescanning millions of live
   objects, cost more than everything else together. The Task Graph now keeps plain adjacency
-  lists (networkx is a view built on demand), constraints are named tuples, and the CLI disables
+  lists (networkx is not used there any more), constraints are named tuples, and the CLI disables
   the cyclic collector for its short life: 2.5-3x faster at 5000 rooms.
 * **One CP-SAT model per forAll instance.** Components that are identical up to renaming (one per
   delivery or room) are solved once and their solutions renamed: delivery 5000, 9.4 s → 1.6 s
@@ -42,6 +42,13 @@ done about it:
   constraints (330 MB of JSON in the original's layout); it is streamed with constraints
   formatted directly. What remains is proportional to the output size: expansion of the goal
   model (~10%), Task Graph (~25%), constraints (~25%), encoding and solving (~20%), writing (~20%).
+* **Start-up, for small missions.** A whole run of a reference mission took 0.7 s, of which
+  0.5 s were imports and table building: OR-Tools' high-level `cp_model` API pulls in pandas and
+  numpy, and lark rebuilt its LALR tables on every run. Components are now built as model
+  protos and solved through OR-Tools' lean `cp_model_helper`, loaded only when a component needs
+  CP-SAT; the parse tables are cached between runs. Room preparation: 0.70 s / 111 MB →
+  0.31 s / 60 MB; missions that need no CP-SAT run in 0.23–0.28 s / 32 MB. What remains is
+  mostly importing the package (about 0.1 s) and, where needed, OR-Tools (0.05 s).
 """
 
 
