@@ -37,8 +37,16 @@ def test_commands_on_a_reference_mission_load_no_heavy_module(tmp_path, command)
     status, modules = _loaded([*command, str(mission), "-q", *out], tmp_path)
     assert status in (0, 3)
     assert not modules & set(HEAVY), sorted(modules & set(HEAVY))
-    # room preparation has components that CP-SAT must solve; the others never load it
-    assert ("ortools" in modules) == (command in (["decompose"], ["count"]))
+    assert "ortools" not in modules  # its components are tiny: enumerated without CP-SAT
+
+
+def test_a_component_too_large_to_enumerate_loads_only_the_lean_cp_sat_helper(tmp_path):
+    from test_interrupts import _coupled_mission
+
+    mission = _coupled_mission(tmp_path / "coupled")  # one component of two million solutions
+    status, modules = _loaded(["count", str(mission), "-q"], tmp_path)
+    assert status == 0
+    assert "ortools" in modules and not modules & set(HEAVY)
 
 
 def test_validate_loads_networkx_only_when_it_runs(tmp_path):

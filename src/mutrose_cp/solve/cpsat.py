@@ -6,8 +6,8 @@ components' solutions, so the space is counted exactly as a product, streamed wi
 counter, sampled uniformly by sampling each component, and optimised component by component.
 Each component is solved by CP-SAT (``enumerate_all_solutions`` with one worker: with more
 workers solutions were lost or repeated); components that are a single exactly-one choice are
-read off directly.  The CP-SAT layer (:mod:`.proto`, :mod:`.run`) is loaded on first use: small
-missions often need none.
+read off directly, and tiny ones enumerated in Python (:mod:`.tiny`).  The CP-SAT layer
+(:mod:`.proto`, :mod:`.run`) is loaded on first use: small missions often need none.
 """
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ from .boolean_model import (
     ValueAfter,
 )
 from .encoding import Encoding
+from .tiny import enumerate_tiny
 
 
 ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
@@ -121,6 +122,16 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
         chosen = sorted((s & frozenset(comp.choice_vars) for s in simple), key=sorted)
         comp.solutions, comp.count = chosen, len(chosen)
         return
+    tiny = enumerate_tiny(bm, comp.records, comp.choice_vars)
+    comp.count, solutions = tiny if tiny is not None else enumerate_with_cp_sat(bm, comp, keep)
+    # a canonical order (by decomposition literal), independent of the solver's search
+    comp.solutions = sorted(solutions, key=sorted) if keep and solutions is not None else None
+
+
+def enumerate_with_cp_sat(bm: BoolModel, comp: Component,
+                          keep: bool = True) -> tuple[int, list[frozenset[int]] | None]:
+    """The number of solutions of ``comp`` and, while ``keep`` and under ``ENUMERATION_CAP``,
+    the true decomposition literals of each, as CP-SAT enumerates them."""
     from .proto import ProtoBuilder  # the CP-SAT layer, loaded when a component needs it
     from .run import INFEASIBLE, OPTIMAL, SolutionCollector, run_solver
 
@@ -132,9 +143,7 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
     # an enumeration is complete only with OPTIMAL (every solution seen) or INFEASIBLE (none)
     run_solver(builder.proto, accept=(OPTIMAL, INFEASIBLE), callback=collector,
                enumerate_all=True, what="enumerating a component")
-    comp.count = collector.count
-    # a canonical order (by decomposition literal), independent of the solver's search
-    comp.solutions = sorted(collector.solutions, key=sorted) if collector.keep else None
+    return collector.count, collector.solutions if collector.keep else None
 
 
 # ---------------------------------------------------------------------------------------------
