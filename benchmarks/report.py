@@ -46,9 +46,9 @@ done about it:
   0.5 s were imports and table building: OR-Tools' high-level `cp_model` API pulls in pandas and
   numpy, and lark rebuilt its LALR tables on every run. Components are now built as model
   protos and solved through OR-Tools' lean `cp_model_helper`, loaded only when a component needs
-  CP-SAT; the parse tables are cached between runs. Room preparation: 0.70 s / 111 MB →
-  0.31 s / 60 MB; missions that need no CP-SAT run in 0.23–0.28 s / 32 MB. What remains is
-  mostly importing the package (about 0.1 s) and, where needed, OR-Tools (0.05 s).
+  CP-SAT; tiny components (a few choices) are enumerated in Python instead, which the reference
+  missions' all are; the parse tables are cached between runs. Room preparation: 0.70 s /
+  111 MB → 0.23 s / 33 MB. What remains is mostly importing the package (about 0.1 s).
 """
 
 
