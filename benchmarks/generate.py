@@ -8,7 +8,11 @@ with ``n`` entities, every one of which produces decomposition work:
   delivery has three alternative decompositions: 3^n valid mission decompositions);
 * ``pickup``: food-logistics pickup, ``n`` pickups, every patient able to open the door;
 * ``vital-signs``: ``n`` occupied rooms with two patients each (comma-separated list), with
-  varied conditions so that the three methods of CollectVitalSigns are all exercised.
+  varied conditions so that the three methods of CollectVitalSigns are all exercised;
+* ``coupled``: the delivery family where every delivery's GetFood may also mark the shared
+  kitchen busy or free (predicate ``busy``, attribute ``is_busy`` of Location; methods
+  ``food-pickup-mark`` and ``food-pickup-free``): the deliveries interact through one fact, so
+  their choices form one component instead of n independent ones.
 
     python benchmarks/generate.py FAMILY N OUT_DIR   -> prints the configuration path
 """
@@ -29,7 +33,34 @@ FAMILIES = {
     "delivery": ("scalability/food-logistics-delivery", "configurationDelivery1.json", "FoodLogisticsDelivery.txt"),
     "pickup": ("scalability/food-logistics-pickup", "configurationPickup1.json", "FoodLogisticsPickup.txt"),
     "vital-signs": ("missions/vital-signs-monitoring", "configuration.json", "VitalSignsMonitoring.txt"),
+    "coupled": ("scalability/food-logistics-delivery", "configurationDelivery1.json", "FoodLogisticsDelivery.txt"),
 }
+
+# what the coupled family adds to the delivery domain (written next to the world, never into the
+# reference corpus)
+COUPLED_PREDICATE = "\t\t(busy ?l - location)\n"
+COUPLED_DOMAIN = """
+\t(:method food-pickup-mark
+\t\t:parameters (?r - robot ?l - location)
+\t\t:task (GetFood ?r ?l)
+\t\t:ordered-subtasks (and (navto ?r ?l) (wait-for-food ?r ?l) (mark-busy ?r ?l))
+\t)
+\t(:method food-pickup-free
+\t\t:parameters (?r - robot ?l - location)
+\t\t:task (GetFood ?r ?l)
+\t\t:ordered-subtasks (and (navto ?r ?l) (wait-for-food ?r ?l) (mark-free ?r ?l))
+\t)
+\t(:action mark-busy
+\t\t:parameters (?r - robot ?l - location)
+\t\t:effect (and (busy ?l))
+\t)
+\t(:action mark-free
+\t\t:parameters (?r - robot ?l - location)
+\t\t:effect (and (not (busy ?l)))
+\t)
+"""
+COUPLED_MAPPING = {"type": "attribute", "name": "is_busy", "relates_to": "Location", "belongs_to": "world_db",
+                   "mapped_type": "predicate", "map": {"pred": "busy", "arg_sorts": ["location"]}}
 
 
 def food_world(n: int, request: str, location_field: str) -> str:
@@ -72,7 +103,18 @@ def vital_signs_world(n: int) -> str:
     return "\n".join(parts) + "\n"
 
 
-WORLDS = {"delivery": delivery_world, "pickup": pickup_world, "vital-signs": vital_signs_world}
+WORLDS = {"delivery": delivery_world, "pickup": pickup_world, "vital-signs": vital_signs_world,
+          "coupled": delivery_world}
+
+
+def coupled_domain(hddl: Path, out_dir: Path) -> Path:
+    """The delivery domain with the shared ``busy`` fact and the methods that set and clear it."""
+    text = hddl.read_text(encoding="utf-8")
+    text = text.replace("\t(:predicates\n", "\t(:predicates\n" + COUPLED_PREDICATE, 1)
+    end = text.rindex(")")
+    out = out_dir / "coupled.hddl"
+    out.write_text(text[:end] + COUPLED_DOMAIN + text[end:], encoding="utf-8")
+    return out
 
 
 def generate(family: str, n: int, out_dir: Path) -> tuple[Path, Path, Path]:
@@ -85,9 +127,12 @@ def generate(family: str, n: int, out_dir: Path) -> tuple[Path, Path, Path]:
     config = json.loads((src / "configuration" / template).read_text(encoding="utf-8"))
     config["world_db"]["path"] = str(world.resolve())
     config["output"]["file_path"] = str((out_dir / f"{family}-{n}.out.json").resolve())
+    hddl = next((src / "hddl").glob("*.hddl"))
+    if family == "coupled":
+        config["semantic_mapping"].append(COUPLED_MAPPING)
+        hddl = coupled_domain(hddl, out_dir)
     cfg = out_dir / f"{family}-{n}.json"
     cfg.write_text(json.dumps(config, indent=2), encoding="utf-8")
-    hddl = next((src / "hddl").glob("*.hddl"))
     return hddl, src / "gm" / gm_name, cfg
 
 
