@@ -34,6 +34,7 @@ from .boolean_model import (
     ValueAfter,
 )
 from .encoding import Encoding
+from .hubs import count_by_hubs
 from .tiny import enumerate_tiny
 
 
@@ -122,10 +123,22 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
         chosen = sorted((s & frozenset(comp.choice_vars) for s in simple), key=sorted)
         comp.solutions, comp.count = chosen, len(chosen)
         return
+    counted = count_by_hubs(bm, comp.records, lambda records, watched: _block_solutions(bm, records, watched))
+    if counted is not None and (not keep or counted > ENUMERATION_CAP):
+        comp.count, comp.solutions = counted, None  # counted without listing (too many to list)
+        return
     tiny = enumerate_tiny(bm, comp.records, comp.choice_vars)
     comp.count, solutions = tiny if tiny is not None else enumerate_with_cp_sat(bm, comp, keep)
     # a canonical order (by decomposition literal), independent of the solver's search
     comp.solutions = sorted(solutions, key=sorted) if keep and solutions is not None else None
+
+
+def _block_solutions(bm: BoolModel, records: Sequence[Record], watched: list[int]) -> list[frozenset[int]] | None:
+    """Each solution of one block of a coupled component, as its true ``watched`` variables."""
+    tiny = enumerate_tiny(bm, records, watched)
+    if tiny is not None:
+        return tiny[1]
+    return enumerate_with_cp_sat(bm, Component(list(records), watched))[1]
 
 
 def enumerate_with_cp_sat(bm: BoolModel, comp: Component,
