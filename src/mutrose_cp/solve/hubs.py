@@ -55,10 +55,11 @@ def count_by_hubs(bm: BoolModel, records: Sequence[Record], enumerate_block: Blo
     on_hubs = [r for r in rest if set(r.variables()) <= targets]
     if any(set(r.variables()) & targets for r in rest if r not in on_hubs):
         return None  # a record mixes hubs and block variables
-    blocks = _blocks([r for r in rest if r not in on_hubs], {abs(l) for h in hubs for l in h.lits if isinstance(l, int)})
+    hub_literal_vars = {abs(l) for h in hubs for l in h.lits if isinstance(l, int)}
+    blocks = _blocks([r for r in rest if r not in on_hubs], hub_literal_vars)
     tallies: list[Tally] = []
     for block_records, variables in blocks:
-        watched = sorted(variables & {abs(l) for h in hubs for l in h.lits if isinstance(l, int)})
+        watched = sorted(variables & hub_literal_vars)
         solutions = enumerate_block(block_records, watched) if block_records else _free(watched)
         if solutions is None:
             return None
@@ -145,7 +146,7 @@ def _product(fixing: list[_Hub], tallies: list[Tally]) -> int:
                 return 0
     product = 1
     for watched, tally in tallies:
-        here = [(v, value) for v, value in required.items() if v in watched]
+        here = [(v, required[v]) for v in watched if v in required]
         product *= sum(n for solution, n in tally.items() if all((v in solution) == bool(value) for v, value in here))
         if product == 0:
             return 0
