@@ -165,40 +165,37 @@ class BoolModel:
 
     # --- helpers that fold constants ------------------------------------------------------------
     def clause(self, lits: Iterable[Lit], label: str = "") -> None:
-        kept: list[Lit] = []
+        kept: dict[Lit, None] = {}  # insertion-ordered set
         for l in lits:
             if l is TRUE:
                 return
-            if l is not FALSE and l not in kept:
-                kept.append(l)
+            if l is not FALSE:
+                kept[l] = None
         self.records.append(Clause(tuple(kept), label))
 
     def and_of(self, lits: Sequence[Lit], name: str) -> Lit:
-        kept: list[Lit] = []
-        for l in lits:
-            if l is FALSE:
-                return FALSE
-            if l is not TRUE and l not in kept:
-                kept.append(l)
-        if not kept:
-            return TRUE
-        if len(kept) == 1:
-            return kept[0]
-        v = self.new_bool(name)
-        self.records.append(AndOf(tuple(kept), v))
-        return v
+        """A literal equivalent to the AND of ``lits``."""
+        return self._define(AndOf, lits, name, absorbing=FALSE)
 
     def or_of(self, lits: Sequence[Lit], name: str) -> Lit:
-        kept: list[Lit] = []
+        """A literal equivalent to the OR of ``lits``."""
+        return self._define(OrOf, lits, name, absorbing=TRUE)
+
+    def _define(self, record: type[AndOf] | type[OrOf], lits: Sequence[Lit], name: str, *, absorbing: Const) -> Lit:
+        """A new variable defined by ``record`` over ``lits``, with constants folded: the
+        absorbing constant decides alone, the neutral one drops out, one literal stands for
+        itself, and repeated literals count once."""
+        neutral = neg(absorbing)
+        kept: dict[Lit, None] = {}  # insertion-ordered set
         for l in lits:
-            if l is TRUE:
-                return TRUE
-            if l is not FALSE and l not in kept:
-                kept.append(l)
+            if l is absorbing:
+                return absorbing
+            if l is not neutral:
+                kept[l] = None
         if not kept:
-            return FALSE
+            return neutral
         if len(kept) == 1:
-            return kept[0]
+            return next(iter(kept))
         v = self.new_bool(name)
-        self.records.append(OrOf(tuple(kept), v))
+        self.records.append(record(tuple(kept), v))
         return v
