@@ -122,3 +122,19 @@ def test_hub_count_equals_brute_force_on_hand_made_models(model) -> None:
         counted = count_by_hubs(bm, records, lambda rs, watched: tiny.enumerate_tiny(bm, rs, watched)[1],
                                 hub_min=2)
     assert expected is not None and counted == expected[0]
+
+
+def test_optimum_of_a_coupled_component_without_its_list(tmp_path, monkeypatch):
+    """--optimize leaves a large coupled component unlisted and lets CP-SAT find its best
+    solution: the same least cost as when every solution is listed and compared."""
+    from mutrose_cp.solve import decompose
+    from mutrose_cp.solve.decompose import DecompositionRequest
+
+    mission = _coupled(9, tmp_path)
+    listed = mission.decompose(DecompositionRequest(optimize=True))
+    assert all(c.solutions is not None for c in listed.space.components)
+    monkeypatch.setattr(decompose, "OPTIMIZE_LIST_LIMIT", 10)
+    unlisted = _coupled(9, tmp_path / "again").decompose(DecompositionRequest(optimize=True))
+    assert any(c.solutions is None for c in unlisted.space.components)
+    assert unlisted.total == listed.total
+    assert unlisted.optimum[1] == listed.optimum[1]

@@ -240,11 +240,13 @@ class Mission:
 
     @_deep
     def decomposition_space(self, progress: Callable[[int, int], None] | None = None,
-                            keep: bool = True) -> DecompositionSpace:
-        """The valid mission decompositions as a product of independently solved components."""
-        from .solve.cpsat import build_space
+                            keep: bool = True, list_limit: int | None = None) -> DecompositionSpace:
+        """The valid mission decompositions as a product of independently solved components
+        (``list_limit``: see ``solve.cpsat.solve_component``)."""
+        from .solve.cpsat import ENUMERATION_CAP, build_space
 
-        return build_space(self.encoding(), keep=keep, progress=progress)
+        return build_space(self.encoding(), keep=keep, progress=progress,
+                           list_limit=ENUMERATION_CAP if list_limit is None else list_limit)
 
     @_deep
     def decompose(self, request: DecompositionRequest | None = None,

@@ -114,8 +114,9 @@ def _simple_choice(comp: Component) -> list[frozenset[int]] | None:
     return [frozenset([v]) for v in choices if v not in excluded]
 
 
-def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
-    """Enumerate a component's solutions (as sets of decomposition literals)."""
+def solve_component(bm: BoolModel, comp: Component, keep: bool = True, list_limit: int = ENUMERATION_CAP) -> None:
+    """Enumerate a component's solutions (as sets of decomposition literals).  A component
+    counted without enumeration (:mod:`.hubs`) is listed only up to ``list_limit`` solutions."""
     if not comp.records or comp.solutions == [] and not comp.choice_vars:
         return
     simple = _simple_choice(comp)
@@ -124,7 +125,7 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True) -> None:
         comp.solutions, comp.count = chosen, len(chosen)
         return
     counted = count_by_hubs(bm, comp.records, lambda records, watched: _block_solutions(bm, records, watched))
-    if counted is not None and (not keep or counted > ENUMERATION_CAP):
+    if counted is not None and (not keep or counted > list_limit):
         comp.count, comp.solutions = counted, None  # counted without listing (too many to list)
         return
     tiny = enumerate_tiny(bm, comp.records, comp.choice_vars)
@@ -309,8 +310,8 @@ def _canonical(r: Record, lit: Callable[[Lit], int | Const], cid: Callable[[int]
             return lit(holds), cid(value), op, bound
 
 
-def build_space(enc: Encoding, keep: bool = True,
-                progress: Callable[[int, int], None] | None = None) -> DecompositionSpace:
+def build_space(enc: Encoding, keep: bool = True, progress: Callable[[int, int], None] | None = None,
+                list_limit: int = ENUMERATION_CAP) -> DecompositionSpace:
     comps = _components(enc)
     # components that are identical up to renaming (one per forAll instance) are solved once
     solved: dict[tuple[object, ...], tuple[list[int], Component]] = {}
@@ -321,7 +322,7 @@ def build_space(enc: Encoding, keep: bool = True,
             key, order = _signature(enc.model, comp)
             hit = solved.get(key)
             if hit is None:
-                solve_component(enc.model, comp, keep)
+                solve_component(enc.model, comp, keep, list_limit)
                 solved[key] = (order, comp)
             else:
                 first_order, first = hit
@@ -330,7 +331,7 @@ def build_space(enc: Encoding, keep: bool = True,
                 comp.solutions = (None if first.solutions is None else
                                   sorted((frozenset(rename[v] for v in sol) for sol in first.solutions), key=sorted))
         else:
-            solve_component(enc.model, comp, keep)
+            solve_component(enc.model, comp, keep, list_limit)
         if progress is not None:
             progress(i + 1, len(comps))
     var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}

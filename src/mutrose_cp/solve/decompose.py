@@ -22,6 +22,9 @@ if TYPE_CHECKING:
 
 DEFAULT_LIMIT = 1000
 SHOWN_REASONS = 3  # reasons named when nothing is valid, unless every reason is asked for
+# the optimum needs no listing: a component counted from its conflict definitions is listed for
+# the output's space section only up to this many solutions (CP-SAT finds its best one)
+OPTIMIZE_LIST_LIMIT = 10_000
 
 
 class Algorithm(StrEnum):
@@ -90,7 +93,7 @@ def decompose(mission: Mission, request: DecompositionRequest,
         if not found:
             raise NoDecompositionError("no valid mission decomposition")
         return DecompositionResult(request.algorithm, found, len(found))
-    space = mission.decomposition_space(progress)
+    space = mission.decomposition_space(progress, list_limit=OPTIMIZE_LIST_LIMIT if request.optimize else None)
     if space.count == 0:
         raise _nothing_valid(mission, request.explain)
     if request.optimize:
