@@ -182,8 +182,8 @@ def main(argv: list[str]) -> int:
            "* **coupled**: delivery where every GetFood may also mark the shared kitchen busy or free, so the "
            "parallel deliveries conflict through one fact: 3^n (2^(n+1) - 1) decompositions in one coupled "
            "component of 2^(n+1) - 1 solutions. `count` counts it from its two conflict definitions "
-           "(`solve/hubs.py`); `--optimize` still lists it while it has at most two million solutions "
-           "(n ≤ 19, the slow rows), and solves it with CP-SAT beyond.", "",
+           "(`solve/hubs.py`); `--optimize` lists it below 10,000 solutions (n ≤ 12) and otherwise lets "
+           "CP-SAT find its best solution.", "",
            "Measured commands: `exploratory` = `decompose --algorithm exploratory` (lists every decomposition); "
            "`cpsat` = `decompose` (exact count, decomposition space and the first 1000 decompositions; for vital "
            "signs `--limit 1`, since each decomposition lists 19 n keys); `cpsat-all` = `decompose --limit 0`; "

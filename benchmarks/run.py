@@ -49,8 +49,7 @@ RUNS = {
         ("cpsat", ["--limit", "1"], None),
     ],
     # one component coupled through a shared fact (2^(n+1) - 1 solutions): counted from its
-    # conflict definitions; --optimize still lists the component while it has at most two
-    # million solutions (n <= 19), then solves it with CP-SAT
+    # conflict definitions; --optimize lists it below 10,000 solutions, else asks CP-SAT
     "coupled": [
         ("count", ["count"], None),
         ("cpsat-optimize", ["--optimize"], None),
