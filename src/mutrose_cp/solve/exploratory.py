@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from ..conditions import holds
 from ..constraints import Constraint
 from ..errors import NoDecompositionError, Problem
 from ..model import Configuration, Domain, GoalModel, InitialState, Literal
@@ -150,7 +149,7 @@ class ExploratoryDecomposer:
             return
         seen = self.scopes.seen_by_achieve(v.index)
         for goal, test in tests:
-            kept = [m for m in self.partials if holds(test, *_lookups(self._state(m, seen)))]
+            kept = [m for m in self.partials if self._state(m, seen).satisfies(test)]
             if not kept and self.partials:
                 self._dropped_all(f"{self.gm.source}: goal {goal}: No decomposition satisfied achieve "
                                   f"condition of goal {goal}")
@@ -186,7 +185,7 @@ class ExploratoryDecomposer:
         emitted: list[_PartialDecomposition] = []
         for m in self.partials:
             start = self._state(m, seen)
-            if not all(holds(c, *_lookups(start)) for c in v.contexts):
+            if not all(start.satisfies(c) for c in v.contexts):
                 continue  # an enabled creation condition does not hold where the task starts
             for d in decompositions:
                 assert d.decomposition is not None
@@ -201,9 +200,3 @@ class ExploratoryDecomposer:
             )
         self.partials = emitted
         self._achieve(v)
-
-
-def _lookups(state: State) -> tuple[Callable[[str, tuple[str, ...]], bool | None],
-                                    Callable[[str, tuple[str, ...]], float | None]]:
-    """The fact and value lookups :func:`holds` evaluates a test with."""
-    return state.fact, state.value

@@ -78,6 +78,10 @@ class State:
     def value(self, function: str, args: tuple[str, ...]) -> float | None:
         return self.values.get((function, args))
 
+    def satisfies(self, test: Test) -> bool:
+        """Whether ``test`` holds here (open world: unknown atoms are satisfied)."""
+        return holds(test, self.fact, self.value)
+
 
 def initial_state(initial: InitialState) -> State:
     """The initial world as a :class:`State` (the first entry of a repeated atom wins)."""
@@ -268,7 +272,7 @@ def unique_branch_valid(tg: TaskGraph, dec: DecompositionVertex, initial: State,
         return True
     state = initial.copy()
     state.apply(effects_of(dec.decomposition))
-    return all(holds(t, state.fact, state.value) for t in tests)
+    return all(state.satisfies(t) for t in tests)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -391,11 +395,11 @@ def robot_precondition_writers(domain: Domain, tg: TaskGraph, d: int, index: Con
 
     An unknown robot fact holds; the value the last chosen writer gives must agree with the
     precondition.  Preconditions that no partner writes are left out."""
-    dec = _decomposition(tg, d)
+    dec = tg.decomposition(d).decomposition
     preconditions = robot_preconditions(domain, dec)
     if not preconditions:
         return []
-    translated = [(e, translate_robot_effects(domain, _decomposition(tg, e), dec))
+    translated = [(e, translate_robot_effects(domain, tg.decomposition(e).decomposition, dec))
                   for e in robot_partners(tg, index, d, queue_position)]
     out = []
     for lit in preconditions:
@@ -404,7 +408,3 @@ def robot_precondition_writers(domain: Domain, tg: TaskGraph, d: int, index: Con
         if writers:
             out.append((lit, writers))
     return out
-
-
-def _decomposition(tg: TaskGraph, d: int) -> Decomposition:
-    return tg.decomposition(d).decomposition
