@@ -95,7 +95,7 @@ def hub_models(draw) -> tuple[BoolModel, list]:
     records: list = []
     literals: list[int] = []
     for b in range(draw(st.integers(1, 4))):
-        choices = [bm.new_bool(f"b{b}c{i}") for i in range(draw(st.integers(2, 3)))]
+        choices = [bm.new_bool(f"b{b}c{i}") for i in range(draw(st.integers(2 if b == 0 else 1, 3)))]
         records.append(Exactly(tuple(choices), TRUE))
         if draw(st.booleans()):
             records.append(Clause((-choices[0], choices[-1])))

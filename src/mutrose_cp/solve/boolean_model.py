@@ -140,6 +140,31 @@ class Compare:
 Record = Clause | Exactly | AndOf | OrOf | ValueAfter | Compare
 
 
+class VariableGroups:
+    """Union-find over variables: the variables of one record belong together, so records
+    sharing a variable (directly or through others) fall in one group."""
+
+    def __init__(self, records: Iterable[Record] = ()) -> None:
+        self._parent: dict[int, int] = {}
+        for r in records:
+            vs = r.variables()
+            for v in vs[1:]:
+                self.join(vs[0], v)
+
+    def find(self, v: int) -> int:
+        parent = self._parent
+        parent.setdefault(v, v)
+        while parent[v] != v:
+            parent[v] = parent[parent[v]]
+            v = parent[v]
+        return v
+
+    def join(self, a: int, b: int) -> None:
+        ra, rb = self.find(a), self.find(b)
+        if ra != rb:
+            self._parent[max(ra, rb)] = min(ra, rb)
+
+
 @dataclass
 class IntRange:
     lo: int

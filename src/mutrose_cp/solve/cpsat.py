@@ -32,6 +32,7 @@ from .boolean_model import (
     OrOf,
     Record,
     ValueAfter,
+    VariableGroups,
 )
 from .encoding import Encoding
 from .hubs import count_by_hubs
@@ -61,20 +62,7 @@ class Component:
 
 def _components(enc: Encoding) -> list[Component]:
     bm = enc.model
-    parent = list(range(len(bm.names)))
-
-    def find(a: int) -> int:
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for r in bm.records:
-        vs = r.variables()
-        for a in vs[1:]:
-            ra, rb = find(vs[0]), find(a)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
+    find = VariableGroups(bm.records).find
     groups: dict[int, Component] = {}
     constant: list[Component] = []
     for r in bm.records:
@@ -124,12 +112,15 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True, list_limi
         chosen = sorted((s & frozenset(comp.choice_vars) for s in simple), key=sorted)
         comp.solutions, comp.count = chosen, len(chosen)
         return
-    counted = count_by_hubs(bm, comp.records, lambda records, watched: _block_solutions(bm, records, watched))
-    if counted is not None and (not keep or counted > list_limit):
-        comp.count, comp.solutions = counted, None  # counted without listing (too many to list)
-        return
-    tiny = enumerate_tiny(bm, comp.records, comp.choice_vars)
-    comp.count, solutions = tiny if tiny is not None else enumerate_with_cp_sat(bm, comp, keep)
+    found: tuple[int, list[frozenset[int]] | None] | None
+    found = enumerate_tiny(bm, comp.records, comp.choice_vars)  # at most 4096 solutions: listed
+    if found is None:
+        counted = count_by_hubs(bm, comp.records, lambda records, watched: _block_solutions(bm, records, watched))
+        if counted is not None and (not keep or counted > list_limit):
+            comp.count, comp.solutions = counted, None  # counted without listing (too many to list)
+            return
+        found = enumerate_with_cp_sat(bm, comp, keep)
+    comp.count, solutions = found
     # a canonical order (by decomposition literal), independent of the solver's search
     comp.solutions = sorted(solutions, key=sorted) if keep and solutions is not None else None
 

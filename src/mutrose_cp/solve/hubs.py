@@ -22,7 +22,8 @@ from collections import Counter
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
-from .boolean_model import TRUE, AndOf, BoolModel, Clause, Exactly, Lit, OrOf, Record
+from .boolean_model import AndOf, BoolModel, Lit, OrOf, Record, VariableGroups
+from .tiny import holds
 
 HUB_MIN_LITERALS = 8  # a definition over this many literals or more is a hub
 MAX_HUBS = 4
@@ -36,27 +37,36 @@ BlockEnumerator = Callable[[Sequence[Record], list[int]], list[frozenset[int]] |
 class _Hub:
     target: int
     lits: tuple[Lit, ...]
-    forcing: int  # the hub value that fixes its literals: 0 for an OR, 1 for an AND
-    fixed: int  # the value each literal then has: 0 for an OR, 1 for an AND
+    # the hub value that fixes its literals, which is also the value they then have:
+    # 0 for an OR (all false), 1 for an AND (all true)
+    fixed: int
 
 
 def count_by_hubs(bm: BoolModel, records: Sequence[Record], enumerate_block: BlockEnumerator,
                   hub_min: int = HUB_MIN_LITERALS, max_hubs: int = MAX_HUBS) -> int | None:
     """The number of solutions of ``records``, or None when they are not hubs over independent
     blocks (then the component is enumerated as a whole)."""
-    hubs = [_Hub(r.target, r.lits, 0 if isinstance(r, OrOf) else 1, 0 if isinstance(r, OrOf) else 1)
+    hubs = [_Hub(r.target, r.lits, 0 if isinstance(r, OrOf) else 1)
             for r in records if isinstance(r, (AndOf, OrOf)) and len(r.lits) >= hub_min]
     if not hubs or len(hubs) > max_hubs:
         return None
     targets = {h.target for h in hubs}
     if any(abs(l) in targets for h in hubs for l in h.lits if isinstance(l, int)):
         return None  # hubs over hubs
-    rest = [r for r in records if not (isinstance(r, (AndOf, OrOf)) and r.target in targets)]
-    on_hubs = [r for r in rest if set(r.variables()) <= targets]
-    if any(set(r.variables()) & targets for r in rest if r not in on_hubs):
-        return None  # a record mixes hubs and block variables
+    on_hubs: list[Record] = []  # constraints between hubs only
+    in_blocks: list[Record] = []
+    for r in records:
+        if isinstance(r, (AndOf, OrOf)) and r.target in targets:
+            continue
+        variables = set(r.variables())
+        if variables and variables <= targets:
+            on_hubs.append(r)
+        elif variables & targets:
+            return None  # a record mixes hubs and block variables
+        else:
+            in_blocks.append(r)
     hub_literal_vars = {abs(l) for h in hubs for l in h.lits if isinstance(l, int)}
-    blocks = _blocks([r for r in rest if r not in on_hubs], hub_literal_vars)
+    blocks = _blocks(in_blocks, hub_literal_vars)
     tallies: list[Tally] = []
     for block_records, variables in blocks:
         watched = sorted(variables & hub_literal_vars)
@@ -65,7 +75,7 @@ def count_by_hubs(bm: BoolModel, records: Sequence[Record], enumerate_block: Blo
             return None
         tallies.append((frozenset(watched), Counter(solutions)))
     return sum(_count_given(hubs, values, tallies) for values in itertools.product((0, 1), repeat=len(hubs))
-               if all(_holds_on_hubs(r, dict(zip((h.target for h in hubs), values))) for r in on_hubs))
+               if all(holds(r, dict(zip((h.target for h in hubs), values)), bm) for r in on_hubs))
 
 
 def _free(variables: list[int]) -> list[frozenset[int]]:
@@ -77,47 +87,17 @@ def _free(variables: list[int]) -> list[frozenset[int]]:
 def _blocks(records: Sequence[Record], hub_literal_vars: set[int]) -> list[tuple[list[Record], set[int]]]:
     """The records split into independent blocks (records sharing no variable), each with its
     variables; hub literals no record mentions are blocks of their own."""
-    parent: dict[int, int] = {}
-
-    def find(a: int) -> int:
-        parent.setdefault(a, a)
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for r in records:
-        vs = r.variables()
-        for v in vs[1:]:
-            ra, rb = find(vs[0]), find(v)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
+    find = VariableGroups(records).find
     groups: dict[int, tuple[list[Record], set[int]]] = {}
     for r in records:
         vs = r.variables()
-        if not vs:
-            groups.setdefault(-1, ([], set()))[0].append(r)
-            continue
-        group = groups.setdefault(find(vs[0]), ([], set()))
+        group = groups.setdefault(find(vs[0]) if vs else -1, ([], set()))
         group[0].append(r)
         group[1].update(vs)
-    for v in sorted(hub_literal_vars):
-        if v not in parent:
-            groups[find(v)] = ([], {v})
+    mentioned = {v for _, variables in groups.values() for v in variables}
+    for v in sorted(hub_literal_vars - mentioned):
+        groups[find(v)] = ([], {v})
     return [groups[k] for k in sorted(groups)]
-
-
-def _holds_on_hubs(r: Record, values: dict[int, int]) -> bool:
-    def lit(l: Lit) -> int:
-        assert isinstance(l, int)
-        return values[l] if l > 0 else 1 - values[-l]
-
-    match r:
-        case Clause(lits=lits):
-            return any(lit(l) for l in lits)
-        case Exactly(lits=lits, target=target):
-            return sum(lit(l) for l in lits) == (lit(target) if isinstance(target, int) else int(target is TRUE))
-    return False  # a definition between hubs: not counted this way (excluded before)
 
 
 Tally = tuple[frozenset[int], Counter[frozenset[int]]]  # a block's watched variables, its solutions
@@ -126,8 +106,8 @@ Tally = tuple[frozenset[int], Counter[frozenset[int]]]  # a block's watched vari
 def _count_given(hubs: list[_Hub], values: tuple[int, ...], tallies: list[Tally]) -> int:
     """Solutions with the hubs at ``values``: forced hubs fix their literals; each other hub
     is "not all fixed", by inclusion and exclusion."""
-    forced = [h for h, v in zip(hubs, values) if v == h.forcing]
-    unforced = [h for h, v in zip(hubs, values) if v != h.forcing]
+    forced = [h for h, v in zip(hubs, values) if v == h.fixed]
+    unforced = [h for h, v in zip(hubs, values) if v != h.fixed]
     total = 0
     for k in range(len(unforced) + 1):
         for subset in itertools.combinations(unforced, k):

@@ -13,6 +13,7 @@ from __future__ import annotations
 import itertools
 from typing import Sequence
 
+from ..conditions import compare
 from .boolean_model import (
     FALSE,
     TRUE,
@@ -30,12 +31,6 @@ from .boolean_model import (
 )
 
 MAX_WORK = 4096  # assignments x records: beyond this CP-SAT is the faster way
-
-_COMPARE = {
-    "=": lambda a, b: a == b, "<>": lambda a, b: a != b, ">": lambda a, b: a > b,
-    "<": lambda a, b: a < b, ">=": lambda a, b: a >= b, "<=": lambda a, b: a <= b,
-}
-
 
 def _defined(r: Record) -> int | None:
     """The variable ``r`` defines, if it is a definition."""
@@ -80,7 +75,7 @@ def enumerate_tiny(bm: BoolModel, records: Sequence[Record],
     solutions: list[frozenset[int]] = []
     for bits in itertools.product((False, True), repeat=len(free)):
         values: dict[int, int] = dict(zip(free, map(int, bits)))
-        if all(_holds(r, values, bm) for r in records):
+        if all(holds(r, values, bm) for r in records):
             solutions.append(frozenset(v for v in choice_vars if values.get(v)))
     return len(solutions), solutions
 
@@ -91,7 +86,7 @@ def _lit(l: Lit, values: dict[int, int]) -> int:
     return values[l] if l > 0 else 1 - values[-l]
 
 
-def _holds(r: Record, values: dict[int, int], bm: BoolModel) -> bool:
+def holds(r: Record, values: dict[int, int], bm: BoolModel) -> bool:
     """Check constraint ``r``, or compute the variable it defines into ``values`` (False when
     the value falls outside the variable's domain, as CP-SAT would reject it)."""
     match r:
@@ -108,7 +103,7 @@ def _holds(r: Record, values: dict[int, int], bm: BoolModel) -> bool:
             return _value_after(r, values, bm)
         case Compare(holds=holds, value=value, op=op, bound=bound):
             assert isinstance(holds, int)  # a variable of its own (free_variables checked it)
-            values[holds] = int(_COMPARE[op](values[value], bound))
+            values[holds] = int(compare(values[value], op, bound))
     return True
 
 
