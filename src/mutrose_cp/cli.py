@@ -21,7 +21,7 @@ from .errors import MissionError
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
-from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult
+from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
 
 
@@ -167,8 +167,8 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     hddl, gm, cfg, folder = _inputs(args)
     start = time.perf_counter()
     if args.algorithm == "exploratory":
-        used = [o for o, v in (("--optimize", args.optimize), ("--sample", args.sample is not None), ("--explain", args.explain),
-                                ("--limit", args.limit != DEFAULT_LIMIT)) if v]
+        used = ["--" + name for name in cpsat_options(limit=args.limit, sample=args.sample, optimize=args.optimize,
+                                                      explain=args.explain)]
         if used:
             raise MissionError(f"{', '.join(used)} {'needs' if len(used) == 1 else 'need'} the CP-SAT decomposer "
                                "(the default): drop --algorithm exploratory")

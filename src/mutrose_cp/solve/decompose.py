@@ -46,15 +46,18 @@ class DecompositionRequest:
     explain: bool = False  # name every reason when nothing is valid (else the first three)
 
     def __post_init__(self) -> None:
-        if self.algorithm == Algorithm.EXPLORATORY and self.cpsat_options():
-            raise ValueError(f"{', '.join(self.cpsat_options())}: only the CP-SAT decomposer offers them")
+        used = cpsat_options(limit=self.limit, sample=self.sample, optimize=self.optimize, explain=self.explain)
+        if self.algorithm == Algorithm.EXPLORATORY and used:
+            raise ValueError(f"{', '.join(used)}: only the CP-SAT decomposer offers them")
         if self.sample is not None and (self.optimize or self.limit != DEFAULT_LIMIT):
             raise ValueError("a sample cannot be combined with optimize or limit")
 
-    def cpsat_options(self) -> list[str]:
-        """The options set that only the CP-SAT decomposer offers."""
-        return [name for name, used in (("optimize", self.optimize), ("sample", self.sample is not None),
-                                        ("explain", self.explain), ("limit", self.limit != DEFAULT_LIMIT)) if used]
+
+def cpsat_options(*, limit: int | None, sample: int | None, optimize: bool, explain: bool) -> list[str]:
+    """The options set, among those only the CP-SAT decomposer offers (the command line names
+    them as flags)."""
+    return [name for name, used in (("optimize", optimize), ("sample", sample is not None),
+                                    ("explain", explain), ("limit", limit != DEFAULT_LIMIT)) if used]
 
 
 @dataclass
