@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, NamedTuple
 
 from ortools.sat.python import cp_model
-from ortools.sat.python import cp_model_helper as cmh
 
 from ..constraints import Constraint, ConstraintKind
 from ..expansion import TaskInstance
@@ -23,6 +22,7 @@ from ..model import RobotNumber
 from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex
 from .boolean_model import FALSE, TRUE, Lit
 from .encoding import Encoding
+from .native import cmh
 from .proto import ProtoBuilder, negated
 
 #: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation

@@ -10,15 +10,6 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from typing import TYPE_CHECKING
-
-from ..interrupt import native_import
-
-if TYPE_CHECKING:
-    from ortools.sat.python import cp_model_helper as cmh
-else:  # loaded on first use, where an interrupt must not cut its initialisation
-    cmh = native_import("ortools.sat.python.cp_model_helper")
-
 from .boolean_model import (
     FALSE,
     TRUE,
@@ -34,6 +25,7 @@ from .boolean_model import (
     Record,
     ValueAfter,
 )
+from .native import cmh
 
 INT_MIN, INT_MAX = -(2**63), 2**63 - 1
 

@@ -12,16 +12,11 @@ search early and report the partial enumeration as a normal status.
 from __future__ import annotations
 
 import threading
-from typing import TYPE_CHECKING, Iterable
-
-from ..interrupt import native_import, signals_held
-
-if TYPE_CHECKING:
-    from ortools.sat.python import cp_model_helper as cmh
-else:  # loaded on first use, where an interrupt must not cut its initialisation
-    cmh = native_import("ortools.sat.python.cp_model_helper")
+from typing import Iterable
 
 from ..errors import MissionError
+from ..interrupt import signals_held
+from .native import cmh
 
 Status = cmh.CpSolverStatus
 OPTIMAL, FEASIBLE, INFEASIBLE = Status.OPTIMAL, Status.FEASIBLE, Status.INFEASIBLE
