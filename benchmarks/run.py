@@ -109,6 +109,22 @@ def _digits(count: str | None) -> str | None:
     return f"{count[0]}.{count[1:4]}e{len(count) - 1}"
 
 
+def summarize(family: str, n: int, label: str, samples: list[dict], accepted: tuple[str, ...] = ("ok",)) -> dict:
+    """One result row from the repeated runs of a command: medians of the accepted runs, or the
+    last run when none was accepted."""
+    ok = [s for s in samples if s["status"] in accepted]
+    row = {"family": family, "n": n, "algorithm": label, "runs": len(samples),
+           "status": "ok" if len(ok) == len(samples) else samples[-1]["status"]}
+    if ok:
+        row.update(seconds=statistics.median(s["seconds"] for s in ok),
+                   peak_mb=statistics.median(s["peak_mb"] for s in ok),
+                   task_instances=ok[0].get("task_instances"), constraints=ok[0].get("constraints"),
+                   mission_decompositions=_digits(ok[0].get("mission_decompositions")))
+    else:
+        row.update(seconds=samples[-1]["seconds"], peak_mb=samples[-1]["peak_mb"], error=samples[-1].get("error"))
+    return row
+
+
 def run_family(family: str, ladder: list[int], repeats: int, timeout: float, work: Path, log,
                extra_sizes: bool = True) -> list[dict]:
     rows = []
@@ -132,19 +148,9 @@ def run_family(family: str, ladder: list[int], repeats: int, timeout: float, wor
                 if r["status"] != "ok":
                     break
             out.unlink(missing_ok=True)
-            ok = [s for s in samples if s["status"] == "ok"]
-            row = {"family": family, "n": n, "algorithm": label, "runs": len(samples),
-                   "status": "ok" if len(ok) == len(samples) else samples[-1]["status"]}
-            if ok:
-                row["seconds"] = statistics.median(s["seconds"] for s in ok)
-                row["peak_mb"] = statistics.median(s["peak_mb"] for s in ok)
-                row["task_instances"] = ok[0].get("task_instances")
-                row["constraints"] = ok[0].get("constraints")
-                row["mission_decompositions"] = _digits(ok[0].get("mission_decompositions"))
-            else:
-                row.update(seconds=samples[-1]["seconds"], peak_mb=samples[-1]["peak_mb"],
-                           error=samples[-1].get("error"))
-                stopped.add(label)  # the ladder stops for this algorithm
+            row = summarize(family, n, label, samples)
+            if "error" in row:
+                stopped.add(label)  # no run succeeded: the ladder stops for this algorithm
             rows.append(row)
             log(f"{family:12} n={n:<6} {label:15} {row['status']:8} {row.get('seconds', 0):8.2f} s "
                 f"{row.get('peak_mb', 0):8.1f} MB  decompositions={row.get('mission_decompositions')}")
@@ -178,16 +184,7 @@ def run_dissertation(family: str, repeats: int, timeout: float, log, quick: bool
                         break
             if samples[-1]["status"] == "timeout":
                 stopped.add(label)
-            ok = [s for s in samples if s["status"] == "ok"]
-            row = {"family": f"dissertation-{family}", "n": n, "algorithm": label, "runs": len(samples),
-                   "status": "ok" if len(ok) == len(samples) else samples[-1]["status"]}
-            if ok:
-                row.update(seconds=statistics.median(s["seconds"] for s in ok),
-                           peak_mb=statistics.median(s["peak_mb"] for s in ok),
-                           task_instances=ok[0].get("task_instances"),
-                           mission_decompositions=_digits(ok[0].get("mission_decompositions")))
-            else:
-                row.update(seconds=samples[-1]["seconds"], peak_mb=samples[-1]["peak_mb"])
+            row = summarize(f"dissertation-{family}", n, label, samples)
             rows.append(row)
             log(f"{row['family']:24} n={n:<6} {label:12} {row['status']:8} {row.get('seconds', 0):8.2f} s "
                 f"tasks={row.get('task_instances')} decompositions={row.get('mission_decompositions')}")
@@ -198,9 +195,7 @@ def run_small_missions(repeats: int, timeout: float, log) -> list[dict]:
     """Every reference mission and configuration as a user runs it, whole process (start-up
     included), with both algorithms; and the floor: ``python -c pass``."""
     floor = [measure([sys.executable, "-c", "pass"], ROOT, timeout) for _ in range(max(repeats, 3))]
-    rows = [{"family": "small", "n": 0, "mission": "python -c pass", "algorithm": "floor", "runs": len(floor),
-             "status": "ok", "seconds": statistics.median(s["seconds"] for s in floor),
-             "peak_mb": statistics.median(s["peak_mb"] for s in floor)}]
+    rows = [{**summarize("small", 0, "floor", floor), "mission": "python -c pass"}]
     runs = [(mission, cfg) for mission in sorted((REFERENCE / "missions").iterdir())
             for cfg in sorted((mission / "configuration").glob("*"))]
     for n, (mission, cfg) in enumerate(runs, start=1):  # n numbers the runs (the family has no size)
@@ -209,14 +204,8 @@ def run_small_missions(repeats: int, timeout: float, log) -> list[dict]:
                 cmd = [sys.executable, "-m", "mutrose_cp", "decompose", str(mission), "--config", cfg.name, "-q",
                        "--json-summary", "-o", str(Path(tmp) / "out"), *extra]
                 samples = [measure(cmd, mission, timeout) for _ in range(repeats)]
-            ok = [s for s in samples if s["status"] in ("ok", "exit 3")]  # exit 3: nothing valid, as the original
-            row = {"family": "small", "n": n, "mission": f"{mission.name}/{cfg.name}", "algorithm": label,
-                   "runs": len(samples), "status": "ok" if len(ok) == len(samples) else samples[-1]["status"]}
-            if ok:
-                row.update(seconds=statistics.median(s["seconds"] for s in ok),
-                           peak_mb=statistics.median(s["peak_mb"] for s in ok),
-                           task_instances=ok[0].get("task_instances"),
-                           mission_decompositions=ok[0].get("mission_decompositions"))
+            # exit 3 (nothing valid, as the original says too) is a finished run
+            row = {**summarize("small", n, label, samples, accepted=("ok", "exit 3")), "mission": f"{mission.name}/{cfg.name}"}
             rows.append(row)
             log(f"small        {row['mission']:50} {label:12} {row['status']:8} {row.get('seconds', 0):6.2f} s "
                 f"{row.get('peak_mb', 0):7.1f} MB")

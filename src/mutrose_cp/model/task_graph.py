@@ -167,7 +167,7 @@ class _Adjacency:
 
     def has_edges_of_kind(self, kind: EdgeKind) -> bool:
         """Whether any edge has ``kind`` (AND, OR or CD; EC edges are kept apart)."""
-        return kind in set(self._edges.kind.values())
+        return any(k is kind for k in self._edges.kind.values())
 
     def has_edge(self, a: int, b: int) -> bool:
         return (a, b) in self._edges.kind or (a, b) in self._edges.ec_pairs
