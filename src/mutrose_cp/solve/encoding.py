@@ -69,6 +69,8 @@ class Encoder:
         self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
         self.index = ConstraintIndex.of(constraints)
         self.scopes = EffectScopes(tg)
+        self.queue = mission_queue(tg)
+        self.queue_pos = {v: i for i, v in enumerate(self.queue)}
         self.x: dict[int, Lit] = {}
         self.active: dict[int, Lit] = {}
         self.or_lits: dict[tuple[int, int], Lit] = {}
@@ -88,13 +90,11 @@ class Encoder:
         tg = self.tg
         if tg.unique_branch:
             return self._unique_branch()
-        queue = mission_queue(tg)
-        self.queue_pos = {v: i for i, v in enumerate(queue)}
         self._choices(0, TRUE)
-        tasks = [v for v in queue if isinstance(tg.vertices[v], TaskVertex)]
+        tasks = [v for v in self.queue if isinstance(tg.vertices[v], TaskVertex)]
         for t in tasks:
             self._task_rules(t)
-        for v in queue:
+        for v in self.queue:
             if checks_parallel_conflicts(tg, v):
                 self._conflicts(v)
             for goal, test in achieve_tests(tg, v, self.gm, self.config):
