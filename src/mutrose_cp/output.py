@@ -7,6 +7,7 @@ never leaves a half-written output.
 """
 from __future__ import annotations
 
+import functools
 import os
 import re
 from dataclasses import dataclass
@@ -33,9 +34,11 @@ _ESCAPES = {'"': '\\"', "\\": "\\\\", "/": "\\/", "\b": "\\b", "\f": "\\f", "\n"
             "\t": "\\t"}
 
 
+@functools.lru_cache(maxsize=1 << 16)
 def _escape(s: str) -> str:
     """Boost's JSON string escaping: named escapes, then every other byte outside printable
-    ASCII as ``\\u00XX`` (per UTF-8 byte, as Boost does)."""
+    ASCII as ``\\u00XX`` (per UTF-8 byte, as Boost does).  Memoized: names, types and flags
+    repeat across thousands of task entries."""
     if _PLAIN.fullmatch(s):
         return '"' + s + '"'
     out = []
@@ -50,6 +53,8 @@ def _escape(s: str) -> str:
 
 
 def _boost_parts(tree: Tree, indent: int, out: list[str]) -> None:
+    """Append the pieces of ``tree``; string members are written inline (most of a task entry's
+    leaves), which halves the calls on large outputs."""
     if isinstance(tree, str):
         out.append(_escape(tree))
         return
@@ -59,20 +64,25 @@ def _boost_parts(tree: Tree, indent: int, out: list[str]) -> None:
     pad = " " * (indent + 4)
     if isinstance(tree, dict):
         out.append("{\n")
-        last = len(tree) - 1
-        for i, (k, v) in enumerate(tree.items()):
-            out.append(f"{pad}{_escape(k)}: ")
-            _boost_parts(v, indent + 4, out)
-            out.append(",\n" if i < last else "\n")
-        out.append(" " * indent + "}")
+        for k, v in tree.items():
+            if isinstance(v, str):
+                out.append(f"{pad}{_escape(k)}: {_escape(v)},\n")
+            else:
+                out.append(f"{pad}{_escape(k)}: ")
+                _boost_parts(v, indent + 4, out)
+                out.append(",\n")
     else:
         out.append("[\n")
-        last = len(tree) - 1
-        for i, v in enumerate(tree):
-            out.append(pad)
-            _boost_parts(v, indent + 4, out)
-            out.append(",\n" if i < last else "\n")
-        out.append(" " * indent + "]")
+        for v in tree:
+            if isinstance(v, str):
+                out.append(f"{pad}{_escape(v)},\n")
+            else:
+                out.append(pad)
+                _boost_parts(v, indent + 4, out)
+                out.append(",\n")
+    last = out[-1]
+    out[-1] = last[:-2] + "\n"  # no comma after the last member
+    out.append(" " * indent + ("}" if isinstance(tree, dict) else "]"))
 
 
 def boost_json(tree: Tree, indent: int = 0) -> str:
