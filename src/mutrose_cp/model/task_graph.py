@@ -131,8 +131,13 @@ class _EdgeIndex:
     kind: dict[tuple[int, int], EdgeKind] = field(default_factory=dict)
     # execution constraints are symmetric and numerous: task -> partners, in the order added
     ec: dict[int, list[ExecutionPartner]] = field(default_factory=dict)
-    ec_pairs: set[tuple[int, int]] = field(default_factory=set)
+    ec_pairs: set[int] = field(default_factory=set)  # (a, b) as _pair(a, b): a third of a tuple's memory
     decompositions: dict[int, list[DecompositionVertex]] = field(default_factory=dict)  # by task
+
+
+def _pair(a: int, b: int) -> int:
+    """One int for the directed vertex pair ``(a, b)`` (vertex indices stay below 2^32)."""
+    return a << 32 | b
 
 
 class _Adjacency:
@@ -170,7 +175,7 @@ class _Adjacency:
         return any(k is kind for k in self._edges.kind.values())
 
     def has_edge(self, a: int, b: int) -> bool:
-        return (a, b) in self._edges.kind or (a, b) in self._edges.ec_pairs
+        return (a, b) in self._edges.kind or _pair(a, b) in self._edges.ec_pairs
 
     def ec_partners(self, v: int) -> list[ExecutionPartner]:
         """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
@@ -235,6 +240,7 @@ class TaskGraphBuilder(_Adjacency):
         self.vertices = []
         self._edges = _EdgeIndex()
         self.achieve_carried: dict[int, list[ScopeVertex]] = {}
+        self._partners: dict[tuple[int, bool, bool], ExecutionPartner] = {}
 
     @property
     def next_index(self) -> int:
@@ -268,27 +274,36 @@ class TaskGraphBuilder(_Adjacency):
             self._edges.by_kind.setdefault((a, kind), []).append(b)
         self._edges.kind[(a, b)] = kind
 
+    def _partner(self, task: int, group: bool, divisible: bool) -> ExecutionPartner:
+        """One shared partner record per (task, flags): a task appears in the partner list of
+        every task it is constrained with, so sharing saves most of the records."""
+        key = (task, group, divisible)
+        partner = self._partners.get(key)
+        if partner is None:
+            partner = self._partners[key] = ExecutionPartner(task, group, divisible)
+        return partner
+
     def add_ec(self, a: int, b: int, group: bool, divisible: bool) -> None:
         """An execution constraint between task vertices ``a`` and ``b`` (both directions)."""
-        self._edges.ec.setdefault(a, []).append(ExecutionPartner(b, group, divisible))
-        self._edges.ec.setdefault(b, []).append(ExecutionPartner(a, group, divisible))
-        self._edges.ec_pairs.add((a, b))
-        self._edges.ec_pairs.add((b, a))
+        self._edges.ec.setdefault(a, []).append(self._partner(b, group, divisible))
+        self._edges.ec.setdefault(b, []).append(self._partner(a, group, divisible))
+        self._edges.ec_pairs.add(_pair(a, b))
+        self._edges.ec_pairs.add(_pair(b, a))
 
     def add_ec_to_all(self, tasks: Sequence[int], v: int, group: bool, divisible: bool) -> None:
         """Execution constraints between task ``v`` and each of ``tasks`` it is not yet linked to,
         in that order (one call for what is the bulk of a large mission's edges)."""
         pairs = self._edges.ec_pairs
         for t in tasks:
-            if (t, v) not in pairs and (t, v) not in self._edges.kind:
+            if _pair(t, v) not in pairs and (t, v) not in self._edges.kind:
                 self.add_ec(t, v, group, divisible)
 
     def add_ec_directions(self, a: int, partners: Iterator[ExecutionPartner]) -> None:
         """One direction of execution constraints, in order (trimming keeps each direction's)."""
         own = self._edges.ec.setdefault(a, [])
         for partner in partners:
-            own.append(partner)
-            self._edges.ec_pairs.add((a, partner.task))
+            own.append(self._partner(*partner))
+            self._edges.ec_pairs.add(_pair(a, partner.task))
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
