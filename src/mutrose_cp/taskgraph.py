@@ -8,6 +8,7 @@ whose vertex order fixes the output keys ``t0, t1, ...``.  The types are in
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Callable, Sequence
 
 from .annotation_tree import GOAL, MEANSEND, TASK, RatNode
 from .conditions import Test, holds, translate
@@ -19,7 +20,6 @@ from .model.task_graph import (
     Decomposition,
     DecompositionVertex,
     EdgeKind,
-    ExecutionPartner,
     GoalVertex,
     OperatorVertex,
     ScopeVertex,
@@ -199,8 +199,9 @@ class _ExecutionScopes:
     ones whose enclosing scope allows it), the tasks already met in it, and the snapshots that
     forAll copies and OR alternatives restart from."""
 
-    def __init__(self, tg: TaskGraphBuilder) -> None:
+    def __init__(self, tg: TaskGraphBuilder, link: Callable[[Sequence[int], int, bool, bool], None]) -> None:
         self.tg = tg
+        self.link = link  # adds the execution constraints of one met task (see meet_task)
         self.active: int | None = None
         self.stack: list[int] = []
         self.flags: dict[int, tuple[bool, bool]] = {}
@@ -248,13 +249,15 @@ class _ExecutionScopes:
         if self.active is None:
             return
         group, divisible = self.flags[self.active]
-        self.tg.add_ec_to_all(sorted(self.tasks), v, group, divisible)
+        self.link(sorted(self.tasks), v, group, divisible)
         self.tasks.append(v)
 
 
-def _execution_constraint_edges(tg: TaskGraphBuilder) -> None:
-    """EC edges from Group/Divisible with the original's priority rules (§5.4)."""
-    scopes = _ExecutionScopes(tg)
+def _execution_constraint_edges(tg: TaskGraphBuilder,
+                                link: Callable[[Sequence[int], int, bool, bool], None] | None = None) -> None:
+    """EC edges from Group/Divisible with the original's priority rules (§5.4), walked on the
+    untrimmed graph (whose scopes decide them) and added by ``link`` (default: into ``tg``)."""
+    scopes = _ExecutionScopes(tg, link or tg.add_ec_to_all)
     for v, vx in enumerate(tg.vertices):
         scopes.leave_finished(vx.parent)
         if isinstance(vx, ScopeVertex):
@@ -294,7 +297,7 @@ class _Trimmer:
             else:
                 self._insert_tasks(v, self._kept_ancestor(v))
         self._carry_removed_achieve_goals()
-        self._copy_cd_and_ec_edges()
+        self._copy_cd_edges()
         return self.new
 
     def _subtree(self, root: int) -> set[int]:
@@ -347,7 +350,7 @@ class _Trimmer:
             if u in index:
                 self.new.achieve_carried.setdefault(index[u], []).append(vx)
 
-    def _copy_cd_and_ec_edges(self) -> None:
+    def _copy_cd_edges(self) -> None:
         tg, index = self.tg, self.index
         for a in range(len(tg.vertices)):
             if a not in index:
@@ -355,10 +358,15 @@ class _Trimmer:
             for b, kind in tg.successors(a):
                 if kind == CD and b in index:
                     self.new.add_edge(index[a], index[b], CD)
-            partners = tg.ec_partners(a)  # each direction keeps its own order
-            if partners:
-                self.new.add_ec_directions(index[a], (ExecutionPartner(index[p.task], p.group, p.divisible)
-                                                      for p in partners if p.task in index))
+
+    def link_kept(self, tasks: Sequence[int], v: int, group: bool, divisible: bool) -> None:
+        """Execution constraints met on the untrimmed graph, added between the kept copies of
+        its tasks: the same partners in the same order as constraining there and copying
+        afterwards, without holding every edge twice."""
+        index, new = self.index, self.new
+        if v not in index:
+            return
+        new.add_ec_to_all([index[t] for t in tasks if t in index], index[v], group, divisible)
 
 
 def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
@@ -370,11 +378,14 @@ def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state
         raise MissionError("the mission has no task: every branch was removed or no task instance exists",
                            gm.source)
     _final_context_edges(tg, builder.cd_edges)
-    _execution_constraint_edges(tg)
     if _is_unique_branch(tg):
+        _execution_constraint_edges(tg)
         return tg.freeze(unique_branch=True)  # the original neither trims nor expands these (§7.7)
     _expand_recursions(tg, state)
-    return _Trimmer(tg).trim().freeze()
+    trimmer = _Trimmer(tg)
+    trimmed = trimmer.trim()
+    _execution_constraint_edges(tg, trimmer.link_kept)
+    return trimmed.freeze()
 
 
 def _expand_recursions(tg: TaskGraphBuilder, state: InitialState) -> None:

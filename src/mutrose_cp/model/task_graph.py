@@ -298,13 +298,6 @@ class TaskGraphBuilder(_Adjacency):
             if _pair(t, v) not in pairs and (t, v) not in self._edges.kind:
                 self.add_ec(t, v, group, divisible)
 
-    def add_ec_directions(self, a: int, partners: Iterator[ExecutionPartner]) -> None:
-        """One direction of execution constraints, in order (trimming keeps each direction's)."""
-        own = self._edges.ec.setdefault(a, [])
-        for partner in partners:
-            own.append(self._partner(*partner))
-            self._edges.ec_pairs.add(_pair(a, partner.task))
-
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})
