@@ -18,6 +18,7 @@ from typing import Sequence
 
 from . import __version__
 from .errors import MissionError
+from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
@@ -205,18 +206,12 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
                         space=section)
     if args.ihtn:
-        from .ihtn import ihtn_file_count, write_ihtns
+        from .ihtn import refuse_oversized_export, write_ihtns
 
         model.decompositions = list(decompositions)
         one = args.ihtn_orderings == "one"
         with phase("counting iHTN files"):
-            files = ihtn_file_count(model, one, args.ihtn_max + 1)
-        if files > args.ihtn_max:
-            how_many = _how_many_ihtn_files(model, one, args.ihtn_max)
-            raise MissionError(f"the iHTN export would write {how_many}, over --ihtn-max {args.ihtn_max}; one file "
-                               "is written per ordering of each listed decomposition: write the first ordering of "
-                               "each with --ihtn-orderings one, list fewer decompositions (--limit K, --optimize), "
-                               "or raise --ihtn-max", str(args.ihtn))
+            files = refuse_oversized_export(model, one, args.ihtn_max, str(args.ihtn))
         ihtn_progress = _Progress(not args.quiet, "iHTN files written")
         with phase("exporting iHTNs"):
             n_files = write_ihtns(model, Path(args.ihtn), lambda n: ihtn_progress(n, files),
@@ -267,27 +262,6 @@ def _warn(args: argparse.Namespace, mission: Mission) -> None:
     if not getattr(args, "quiet", False):
         for w in (*mission.warnings, *mission.initial_state.warnings):
             print(f"warning: {w}", file=sys.stderr)
-
-
-def _how_many_ihtn_files(model, one: bool, limit: int) -> str:
-    """How many files a refused iHTN export would write, as exactly as a second of work tells."""
-    from .ihtn import CountTooCostly, count_orderings, ihtn_file_count
-
-    try:
-        return f"{ihtn_file_count(model, one, 10**18, budget=20_000):,} files"
-    except CountTooCostly:
-        pass
-    first = model.decompositions[0]
-    members = set(first)
-    succ: dict[int, set[int]] = {}
-    for c in model.constraints:
-        if c.kind in ("SEQ", "FB") and c.first in members and c.second in members:
-            succ.setdefault(c.first, set()).add(c.second)
-    try:
-        alone = count_orderings(list(first), succ, 10**18, budget=500_000)
-    except CountTooCostly:
-        return f"more than {limit:,} files"
-    return f"at least {alone:,} files (the first listed decomposition alone has that many orderings)"
 
 
 def _refuse_inputs_as_output(out_path: Path | None, mission: Mission, inputs: tuple[Path, ...]) -> None:
@@ -393,7 +367,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                  "into DIR instead of the output file")
     p.add_argument("--ihtn-orderings", choices=("all", "one"), default="all",
                    help="--ihtn: every ordering of each decomposition (default), or only the first consistent one")
-    p.add_argument("--ihtn-max", type=_count_option(1), default=10_000, metavar="N",
+    p.add_argument("--ihtn-max", type=_count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
                    help="--ihtn: refuse (exit 2) an export of more than N files (default 10000)")
     p.set_defaults(func=cmd_decompose)
 
