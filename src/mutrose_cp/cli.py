@@ -6,7 +6,6 @@ decomposition exits with 3; nothing here prints a Python traceback.
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import os
 import signal
@@ -22,6 +21,7 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
+from .process import command_settings, exit_process, usable_stderr
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
 
@@ -391,51 +391,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 def entry() -> None:
     """The console script (and ``python -m mutrose_cp``): run the command and exit with its
-    status.  After an interrupt everything is cleaned up already, and the process ends at once:
-    a CP-SAT search stopped midway can leave native state whose teardown at interpreter exit
-    aborts the process (status 134 instead of 130)."""
-    code = main()
-    if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
-        for stream in (sys.stdout, sys.stderr):
-            try:
-                stream.flush()
-            except (OSError, ValueError):
-                pass
-        os._exit(code)
-    sys.exit(code)
+    status."""
+    exit_process(main())
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    # The pipeline allocates millions of small acyclic objects (vertices, edges, literals);
-    # Python's cyclic collector then rescans them over and over, which cost up to 3x the
-    # run time on large missions.  A command is short-lived: the collector is paused meanwhile.
-    collecting = gc.isenabled()
-    gc.disable()
-    # exact counts are big integers (3^10000 has 4772 digits, over Python's default limit for
-    # converting an int to text); the limit is restored for an embedding program
-    digits = sys.get_int_max_str_digits()
-    sys.set_int_max_str_digits(0)
-    try:
+    with command_settings():
         return _main(argv)
-    finally:
-        sys.set_int_max_str_digits(digits)
-        if collecting:
-            gc.enable()
-
-
-def _usable_stderr() -> None:
-    """Started with stderr closed, messages go nowhere rather than failing the command."""
-    try:
-        os.fstat(2)
-    except OSError:
-        sys.stderr = open(os.devnull, "w")  # noqa: SIM115 - lives as long as the process
-        return
-    if sys.stderr is None:
-        sys.stderr = open(os.devnull, "w")  # noqa: SIM115
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    _usable_stderr()
+    usable_stderr()
     if hasattr(signal, "SIGXFSZ"):
         # over a file-size limit, a write fails with EFBIG (a located error) instead of the
         # signal killing the process
