@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Sequence
 
 from . import __version__
-from .errors import MissionError
+from .errors import MissionError, Problem
 from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
@@ -201,7 +201,10 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         out_path = folder / mission.config.output.file_path
     else:
         out_path = mission.output_path()
-    file_type = args.format or mission.config.output.file_type
+    file_type = _output_format(args, mission)
+    if args.json_style == "standard" and file_type != "json":
+        raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
+                           "drop --json-style or write JSON (--format json)")
     _refuse_inputs_as_output(out_path if not args.ihtn else None, mission, (hddl, gm, cfg))
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
                         space=section)
@@ -219,7 +222,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     else:
         n_files = 0
         with phase("writing the output"):
-            write_output(model, out_path, file_type)
+            write_output(model, out_path, file_type, args.json_style)
     elapsed = time.perf_counter() - start
     kinds = Counter(str(c.kind) for c in constraints)
     data = {
@@ -239,6 +242,25 @@ def cmd_decompose(args: argparse.Namespace) -> int:
              f"decompositions, constraints SEQ {kinds.get('SEQ', 0)} FB {kinds.get('FB', 0)} EC "
              f"{kinds.get('EC', 0)}, {_big(total)} valid mission decompositions{note} -> {where} ({elapsed:.2f} s)", mission)
     return 0
+
+
+OUTPUT_SUFFIXES = {".json": "json", ".xml": "xml"}
+
+
+def _output_format(args: argparse.Namespace, mission: Mission) -> str:
+    """``--format``; else the suffix of ``-o`` (``x.json`` is JSON), with a warning when the
+    configuration asks for the other format; else the configuration's ``output.file_type``."""
+    configured = mission.config.output.file_type
+    if args.format:
+        return str(args.format)
+    by_suffix = OUTPUT_SUFFIXES.get(Path(args.output).suffix.lower()) if args.output else None
+    if by_suffix is None:
+        return configured
+    if by_suffix != configured and not args.quiet:
+        print(f"warning: {args.output}: writing {by_suffix}, as the suffix says, although {mission.config_path} asks "
+              f"for {configured} (output.file_type); --format {configured} follows the configuration",
+              file=sys.stderr)
+    return by_suffix
 
 
 def cmd_graph(args: argparse.Namespace) -> int:
@@ -351,7 +373,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("decompose", help="decompose the mission and write the output file")
     common(p)
     p.add_argument("-o", "--output", help="output file (overrides the configuration's output.file_path)")
-    p.add_argument("--format", choices=("json", "xml"), help="output format (default: the configuration's)")
+    p.add_argument("--format", choices=("json", "xml"),
+                   help="output format (default: the suffix of -o, .json or .xml, else the configuration's)")
+    p.add_argument("--json-style", choices=("boost", "standard"), default="boost",
+                   help="boost (default): the original's JSON, which its readers expect; standard: valid UTF-8 "
+                        "JSON with [] and {} for empty lists, numbers as numbers")
     p.add_argument("--algorithm", choices=("cpsat", "exploratory"), default="cpsat",
                    help="cpsat (default): solver-backed, factored; exploratory: the original's explicit combination")
     p.add_argument("--limit", type=_count_option(0), default=DEFAULT_LIMIT, metavar="K",
@@ -419,7 +445,22 @@ def _main(argv: Sequence[str] | None) -> int:
             status: int = args.func(args)
             return status
     except (Interrupted, MissionError, RecursionError, OSError) as err:
-        return _report(err)
+        status = _report(err)
+        if getattr(args, "json_summary", False):
+            print(json.dumps({"command": args.command, "ok": False, "status": status, "problems": _problems(err)},
+                             sort_keys=True))
+        return status
+
+
+def _problems(err: Interrupted | MissionError | RecursionError | OSError) -> list[dict[str, str | int | None]]:
+    """Why a command failed, as the records ``--json-summary`` lists."""
+    if isinstance(err, MissionError):
+        return [p.record() for p in err.problems]
+    if isinstance(err, OSError):
+        return [Problem(str(err.filename or ""), err.strerror or str(err)).record()]
+    if isinstance(err, Interrupted):
+        return [Problem("", f"interrupted{' while ' + err.during if err.during else ''} ({err})").record()]
+    return [Problem("", "the mission is nested too deeply to process").record()]
 
 
 def _report(err: Interrupted | MissionError | RecursionError | OSError) -> int:
