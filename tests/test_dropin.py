@@ -232,3 +232,19 @@ def test_verbose_trace_shows_every_stage(tmp_path, capsys, monkeypatch):
     assert "AT3_1: FurnitureMoving (?rm = RoomA) at location [RoomA], robots 2..4" in out
     assert "Number of sequential constraints: 8" in out
     assert (folder / "output" / "task_output.json").is_file()
+
+
+def test_a_closed_stdout_ends_with_a_message_not_a_traceback(tmp_path):
+    """``mutrose … -p | head -1``: the reader goes away while the blocks are printed."""
+    mission = require_reference() / "missions" / "lab-samples-logistics"
+    folder = _copy(mission, tmp_path)
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # every write to stdout now fails with EPIPE
+    try:
+        run = subprocess.run([sys.executable, "-m", "mutrose_cp.dropin",
+                              *_relative(mission, mission / "configuration" / "configuration.json"), "-p"],
+                             cwd=folder, stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=300)
+    finally:
+        os.close(write_end)
+    assert run.returncode == 2
+    assert run.stderr.strip() == "error: standard output: the reader closed the pipe; the output was not written"

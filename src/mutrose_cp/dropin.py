@@ -206,16 +206,35 @@ def main(argv: Sequence[str] | None = None) -> int:
         if hasattr(signal, "SIGXFSZ"):
             signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write over a size limit fails with EFBIG
         try:
-            inv = parse(sys.argv[1:] if argv is None else list(argv))
-            _openable(inv.files)
-        except Usage as usage:
-            print(usage)
-            return usage.status
-        try:
-            with signal_handlers(), input_limit(INPUT_LIMIT_MB * MB):
-                return run(inv)
-        except (Interrupted, MissionError, RecursionError, OSError) as err:
-            return _report(err)
+            return _command(sys.argv[1:] if argv is None else list(argv))
+        except BrokenPipeError:
+            return _stdout_closed()
+
+
+def _command(argv: list[str]) -> int:
+    try:
+        inv = parse(argv)
+        _openable(inv.files)
+    except Usage as usage:
+        print(usage)
+        return usage.status
+    try:
+        with signal_handlers(), input_limit(INPUT_LIMIT_MB * MB):
+            return run(inv)
+    except BrokenPipeError:
+        raise
+    except (Interrupted, MissionError, RecursionError, OSError) as err:
+        return _report(err)
+
+
+def _stdout_closed() -> int:
+    """The reader of stdout went away (``mutrose … -p | head``): say so on stderr, and send
+    what is left to print nowhere, so that the exit does not fail a second time."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    print("error: standard output: the reader closed the pipe; the output was not written", file=sys.stderr)
+    return 2
 
 
 def entry() -> None:
