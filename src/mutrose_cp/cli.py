@@ -6,7 +6,6 @@ decomposition exits with 3; nothing here prints a Python traceback.
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import os
 import signal
@@ -17,10 +16,12 @@ from pathlib import Path
 from typing import Sequence
 
 from . import __version__
-from .errors import MissionError
+from .errors import MissionError, Problem
+from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
+from .process import command_settings, exit_process, usable_stderr
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
 
@@ -200,23 +201,20 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         out_path = folder / mission.config.output.file_path
     else:
         out_path = mission.output_path()
-    file_type = args.format or mission.config.output.file_type
+    file_type = _output_format(args, mission)
+    if args.json_style == "standard" and file_type != "json":
+        raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
+                           "drop --json-style or write JSON (--format json)")
     _refuse_inputs_as_output(out_path if not args.ihtn else None, mission, (hddl, gm, cfg))
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
                         space=section)
     if args.ihtn:
-        from .ihtn import ihtn_file_count, write_ihtns
+        from .ihtn import refuse_oversized_export, write_ihtns
 
         model.decompositions = list(decompositions)
         one = args.ihtn_orderings == "one"
         with phase("counting iHTN files"):
-            files = ihtn_file_count(model, one, args.ihtn_max + 1)
-        if files > args.ihtn_max:
-            how_many = _how_many_ihtn_files(model, one, args.ihtn_max)
-            raise MissionError(f"the iHTN export would write {how_many}, over --ihtn-max {args.ihtn_max}; one file "
-                               "is written per ordering of each listed decomposition: write the first ordering of "
-                               "each with --ihtn-orderings one, list fewer decompositions (--limit K, --optimize), "
-                               "or raise --ihtn-max", str(args.ihtn))
+            files = refuse_oversized_export(model, one, args.ihtn_max, str(args.ihtn))
         ihtn_progress = _Progress(not args.quiet, "iHTN files written")
         with phase("exporting iHTNs"):
             n_files = write_ihtns(model, Path(args.ihtn), lambda n: ihtn_progress(n, files),
@@ -224,7 +222,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     else:
         n_files = 0
         with phase("writing the output"):
-            write_output(model, out_path, file_type)
+            write_output(model, out_path, file_type, args.json_style)
     elapsed = time.perf_counter() - start
     kinds = Counter(str(c.kind) for c in constraints)
     data = {
@@ -244,6 +242,25 @@ def cmd_decompose(args: argparse.Namespace) -> int:
              f"decompositions, constraints SEQ {kinds.get('SEQ', 0)} FB {kinds.get('FB', 0)} EC "
              f"{kinds.get('EC', 0)}, {_big(total)} valid mission decompositions{note} -> {where} ({elapsed:.2f} s)", mission)
     return 0
+
+
+OUTPUT_SUFFIXES = {".json": "json", ".xml": "xml"}
+
+
+def _output_format(args: argparse.Namespace, mission: Mission) -> str:
+    """``--format``; else the suffix of ``-o`` (``x.json`` is JSON), with a warning when the
+    configuration asks for the other format; else the configuration's ``output.file_type``."""
+    configured = mission.config.output.file_type
+    if args.format:
+        return str(args.format)
+    by_suffix = OUTPUT_SUFFIXES.get(Path(args.output).suffix.lower()) if args.output else None
+    if by_suffix is None:
+        return configured
+    if by_suffix != configured and not args.quiet:
+        print(f"warning: {args.output}: writing {by_suffix}, as the suffix says, although {mission.config_path} asks "
+              f"for {configured} (output.file_type); --format {configured} follows the configuration",
+              file=sys.stderr)
+    return by_suffix
 
 
 def cmd_graph(args: argparse.Namespace) -> int:
@@ -267,27 +284,6 @@ def _warn(args: argparse.Namespace, mission: Mission) -> None:
     if not getattr(args, "quiet", False):
         for w in (*mission.warnings, *mission.initial_state.warnings):
             print(f"warning: {w}", file=sys.stderr)
-
-
-def _how_many_ihtn_files(model, one: bool, limit: int) -> str:
-    """How many files a refused iHTN export would write, as exactly as a second of work tells."""
-    from .ihtn import CountTooCostly, count_orderings, ihtn_file_count
-
-    try:
-        return f"{ihtn_file_count(model, one, 10**18, budget=20_000):,} files"
-    except CountTooCostly:
-        pass
-    first = model.decompositions[0]
-    members = set(first)
-    succ: dict[int, set[int]] = {}
-    for c in model.constraints:
-        if c.kind in ("SEQ", "FB") and c.first in members and c.second in members:
-            succ.setdefault(c.first, set()).add(c.second)
-    try:
-        alone = count_orderings(list(first), succ, 10**18, budget=500_000)
-    except CountTooCostly:
-        return f"more than {limit:,} files"
-    return f"at least {alone:,} files (the first listed decomposition alone has that many orderings)"
 
 
 def _refuse_inputs_as_output(out_path: Path | None, mission: Mission, inputs: tuple[Path, ...]) -> None:
@@ -377,7 +373,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("decompose", help="decompose the mission and write the output file")
     common(p)
     p.add_argument("-o", "--output", help="output file (overrides the configuration's output.file_path)")
-    p.add_argument("--format", choices=("json", "xml"), help="output format (default: the configuration's)")
+    p.add_argument("--format", choices=("json", "xml"),
+                   help="output format (default: the suffix of -o, .json or .xml, else the configuration's)")
+    p.add_argument("--json-style", choices=("boost", "standard"), default="boost",
+                   help="boost (default): the original's JSON, which its readers expect; standard: valid UTF-8 "
+                        "JSON with [] and {} for empty lists, numbers as numbers")
     p.add_argument("--algorithm", choices=("cpsat", "exploratory"), default="cpsat",
                    help="cpsat (default): solver-backed, factored; exploratory: the original's explicit combination")
     p.add_argument("--limit", type=_count_option(0), default=DEFAULT_LIMIT, metavar="K",
@@ -393,7 +393,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                  "into DIR instead of the output file")
     p.add_argument("--ihtn-orderings", choices=("all", "one"), default="all",
                    help="--ihtn: every ordering of each decomposition (default), or only the first consistent one")
-    p.add_argument("--ihtn-max", type=_count_option(1), default=10_000, metavar="N",
+    p.add_argument("--ihtn-max", type=_count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
                    help="--ihtn: refuse (exit 2) an export of more than N files (default 10000)")
     p.set_defaults(func=cmd_decompose)
 
@@ -417,51 +417,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 def entry() -> None:
     """The console script (and ``python -m mutrose_cp``): run the command and exit with its
-    status.  After an interrupt everything is cleaned up already, and the process ends at once:
-    a CP-SAT search stopped midway can leave native state whose teardown at interpreter exit
-    aborts the process (status 134 instead of 130)."""
-    code = main()
-    if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
-        for stream in (sys.stdout, sys.stderr):
-            try:
-                stream.flush()
-            except (OSError, ValueError):
-                pass
-        os._exit(code)
-    sys.exit(code)
+    status."""
+    exit_process(main())
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    # The pipeline allocates millions of small acyclic objects (vertices, edges, literals);
-    # Python's cyclic collector then rescans them over and over, which cost up to 3x the
-    # run time on large missions.  A command is short-lived: the collector is paused meanwhile.
-    collecting = gc.isenabled()
-    gc.disable()
-    # exact counts are big integers (3^10000 has 4772 digits, over Python's default limit for
-    # converting an int to text); the limit is restored for an embedding program
-    digits = sys.get_int_max_str_digits()
-    sys.set_int_max_str_digits(0)
-    try:
+    with command_settings():
         return _main(argv)
-    finally:
-        sys.set_int_max_str_digits(digits)
-        if collecting:
-            gc.enable()
-
-
-def _usable_stderr() -> None:
-    """Started with stderr closed, messages go nowhere rather than failing the command."""
-    try:
-        os.fstat(2)
-    except OSError:
-        sys.stderr = open(os.devnull, "w")  # noqa: SIM115 - lives as long as the process
-        return
-    if sys.stderr is None:
-        sys.stderr = open(os.devnull, "w")  # noqa: SIM115
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    _usable_stderr()
+    usable_stderr()
     if hasattr(signal, "SIGXFSZ"):
         # over a file-size limit, a write fails with EFBIG (a located error) instead of the
         # signal killing the process
@@ -479,7 +445,22 @@ def _main(argv: Sequence[str] | None) -> int:
             status: int = args.func(args)
             return status
     except (Interrupted, MissionError, RecursionError, OSError) as err:
-        return _report(err)
+        status = _report(err)
+        if getattr(args, "json_summary", False):
+            print(json.dumps({"command": args.command, "ok": False, "status": status, "problems": _problems(err)},
+                             sort_keys=True))
+        return status
+
+
+def _problems(err: Interrupted | MissionError | RecursionError | OSError) -> list[dict[str, str | int | None]]:
+    """Why a command failed, as the records ``--json-summary`` lists."""
+    if isinstance(err, MissionError):
+        return [p.record() for p in err.problems]
+    if isinstance(err, OSError):
+        return [Problem(str(err.filename or ""), err.strerror or str(err)).record()]
+    if isinstance(err, Interrupted):
+        return [Problem("", f"interrupted{' while ' + err.during if err.during else ''} ({err})").record()]
+    return [Problem("", "the mission is nested too deeply to process").record()]
 
 
 def _report(err: Interrupted | MissionError | RecursionError | OSError) -> int:

@@ -8,6 +8,7 @@ message and an exit status, never a traceback.
 from __future__ import annotations
 
 import difflib
+import re
 from dataclasses import dataclass
 from typing import Iterable
 
@@ -28,6 +29,22 @@ class Problem:
         if not self.hint:
             return text
         return f"{text} {self.hint}" if text.endswith((".", "!", "?")) else f"{text}. {self.hint}"
+
+
+    def record(self) -> dict[str, str | int | None]:
+        """The problem for scripts: ``file``, ``line`` and ``column`` (None where unknown),
+        ``message`` (after the rest of the location, such as ``goal G3``) and ``hint``."""
+        found = _FILE_LINE_COLUMN.fullmatch(self.where)
+        if found:
+            file, line, column = found["file"], int(found["line"]), found["column"]
+            return {"file": file, "line": line, "column": int(column) if column else None, "message": self.message,
+                    "hint": self.hint}
+        file, sep, inside = self.where.partition(": ")
+        message = f"{inside}: {self.message}" if sep else self.message
+        return {"file": file or None, "line": None, "column": None, "message": message, "hint": self.hint}
+
+
+_FILE_LINE_COLUMN = re.compile(r"(?P<file>.+?):(?P<line>\d+)(?::(?P<column>\d+))?")
 
 
 class MissionError(Exception):

@@ -248,6 +248,38 @@ def ihtn_file_count(model: OutputModel, one_per_decomposition: bool, cap: int, b
     return total
 
 
+DEFAULT_MAX_FILES = 10_000  # an export of more files is refused before anything is written
+
+
+def refuse_oversized_export(model: OutputModel, one_per_decomposition: bool, maximum: int, folder: str) -> int:
+    """The number of files the export will write; a :class:`MissionError` (located at
+    ``folder``) when that is more than ``maximum``, saying how many and what to do instead."""
+    files = ihtn_file_count(model, one_per_decomposition, maximum + 1)
+    if files > maximum:
+        raise MissionError(f"the iHTN export would write {_how_many_files(model, one_per_decomposition, maximum)}, "
+                           f"over --ihtn-max {maximum}; one file is written per ordering of each listed "
+                           "decomposition: write the first ordering of each with --ihtn-orderings one, list fewer "
+                           "decompositions (--limit K, --optimize), or raise --ihtn-max", folder)
+    return files
+
+
+def _how_many_files(model: OutputModel, one: bool, limit: int) -> str:
+    """How many files a refused export would write, as exactly as a second of work tells."""
+    try:
+        return f"{ihtn_file_count(model, one, 10**18, budget=20_000):,} files"
+    except CountTooCostly:
+        pass
+    first = _listed(model)
+    members = next(iter(first))
+    succ, _ = _constraint_index(model)
+    local = {d: succ.get(d, set()) & set(members) for d in members}
+    try:
+        alone = count_orderings(list(members), local, 10**18, budget=500_000)
+    except CountTooCostly:
+        return f"more than {limit:,} files"
+    return f"at least {alone:,} files (the first listed decomposition alone has that many orderings)"
+
+
 def write_ihtns(model: OutputModel, folder: Path, progress: Callable[[int], None] | None = None, *,
                 one_per_decomposition: bool = False) -> int:
     """Write ``ihtn_<n>.json`` files into ``folder``, all or nothing.

@@ -456,11 +456,16 @@ class _XmlWriter:
         self.close(tag, level)
 
 
-def write_output(model: OutputModel, path: str | os.PathLike[str], file_type: str) -> None:
-    """Write the output file atomically in ``json`` or ``xml``."""
+def write_output(model: OutputModel, path: str | os.PathLike[str], file_type: str, json_style: str = "boost") -> None:
+    """Write the output file atomically in ``json`` or ``xml``; JSON in the Boost style the
+    original's readers expect, or in standard JSON (``standard_json.py``)."""
     builder = OutputBuilder(model)
     with atomic_writer(path) as fh:
         if file_type == "xml":
             builder.write_xml(fh)
+        elif json_style == "standard":
+            from .standard_json import write_standard_json
+
+            write_standard_json(builder, fh)
         else:
             builder.write_json(fh)

@@ -1,0 +1,246 @@
+"""The ``mutrose`` command: the original decomposer's command line, for the tools that call it.
+
+    mutrose HDDL GM CONFIG [-v | -p | -h]
+
+The VS Code plug-in runs ``mutrose <hddl> ./temp.txt <config> -p`` in its workspace and shows
+stdout (the three ``-p`` blocks on success, the messages on failure); the 2D MutRoSe simulator
+runs ``mutrose HDDL GM CONFIG`` in its mission folder and reads the file at the configuration's
+``output.file_path``.  Both work unchanged (spec ``output.md`` §1, §5, §6):
+
+* the first three arguments are the files, whatever they look like; later ones are options;
+* the output goes where the configuration says, relative to the current directory, in its
+  format; ``-h`` writes ``./ihtn/ihtn_<n>.json`` instead (at most ``--ihtn-max=N`` files,
+  10000 by default: a larger export is refused before anything is written);
+* ``-p`` prints the three blocks, ``-v`` a trace; both together are refused (status 1);
+* an unknown option is reported as ``Unknown option [x]`` and ignored;
+* missing arguments print the original's message (status 1), an unopenable file
+  ``I can't open <path>!`` (status 2).
+
+Where the original aborts (invalid input, no valid decomposition) this command prints located
+errors on stdout, where the plug-in reads them, and exits with mutrose-cp's status: 2 for
+invalid input, 3 for a mission without any valid decomposition.
+
+The CP-SAT decomposer lists every valid decomposition (as the original does); ``MUTROSE_ALGORITHM=
+exploratory`` in the environment, or the option ``--algorithm=exploratory``, selects the
+original's explicit combination instead.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Mapping, Sequence
+
+from . import console
+from .errors import MissionError
+from .ihtn import DEFAULT_MAX_FILES
+from .interrupt import Interrupted, phase, signal_handlers
+from .io.text import MB, input_limit
+from .process import command_settings, exit_process, usable_stderr
+from .solve.decompose import Algorithm, DecompositionRequest
+
+ALGORITHM_ENV = "MUTROSE_ALGORITHM"
+IHTN_FOLDER = Path("ihtn")
+MISSING = ("You need to provide a domain file as input.", "You need to provide a Goal Model JSON file as input.",
+           "You need to provide a configuration file as input.")
+INPUT_LIMIT_MB = 256
+
+
+@dataclass(frozen=True)
+class Invocation:
+    """What the command line asks for."""
+
+    files: tuple[str, str, str]  # HDDL, goal model, configuration
+    verbose: bool = False  # -v
+    pretty: bool = False  # -p
+    ihtn: bool = False  # -h
+    algorithm: Algorithm = Algorithm.CPSAT
+    ihtn_max: int = DEFAULT_MAX_FILES
+
+
+class Usage(Exception):
+    """The command line cannot be run: the message and the original's exit status."""
+
+    def __init__(self, message: str, status: int) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+def _algorithm(name: str, source: str) -> Algorithm:
+    try:
+        return Algorithm(name.strip().lower())
+    except ValueError:
+        raise Usage(f"{source}: unknown decomposer {name!r}: choose cpsat or exploratory", 2) from None
+
+
+def _ihtn_max(text: str) -> int:
+    if not text.isdigit() or int(text) < 1:
+        raise Usage(f"--ihtn-max={text}: expected a whole number of files, at least 1", 2)
+    return int(text)
+
+
+def parse(argv: Sequence[str], environ: Mapping[str, str] = os.environ, out: IO[str] | None = None) -> Invocation:
+    """The invocation, read as the original reads it.  Unknown options are reported on ``out``
+    (stdout) and ignored; :class:`Usage` is raised for missing files and for ``-v`` with ``-p``."""
+    files, options = list(argv[:3]), list(argv[3:])
+    flags = {"-v": False, "-p": False, "-h": False}
+    unknown: list[str] = []
+    algorithm = _algorithm(environ[ALGORITHM_ENV], ALGORITHM_ENV) if environ.get(ALGORITHM_ENV) else Algorithm.CPSAT
+    ihtn_max = DEFAULT_MAX_FILES
+    for opt in options:
+        if opt in flags:
+            flags[opt] = True
+        elif opt.startswith("--algorithm="):
+            algorithm = _algorithm(opt.partition("=")[2], "--algorithm")
+        elif opt.startswith("--ihtn-max="):
+            ihtn_max = _ihtn_max(opt.partition("=")[2])
+        else:
+            unknown.append(opt)
+    if unknown:
+        print("\n" + "".join(f"Unknown option [{opt}]\n" for opt in unknown), file=out or sys.stdout)
+    if flags["-v"] and flags["-p"]:
+        raise Usage("Options -v and -p cannot be used together!", 1)
+    if len(files) < 3:
+        raise Usage(MISSING[len(files)], 1)
+    return Invocation((files[0], files[1], files[2]), flags["-v"], flags["-p"], flags["-h"], algorithm, ihtn_max)
+
+
+def _openable(files: Sequence[str]) -> None:
+    """The original opens the three files first: the first that cannot be opened is named."""
+    for path in files:
+        try:
+            with open(path, "rb"):
+                pass
+        except OSError:
+            raise Usage(f"I can't open {path}!", 2) from None
+
+
+def run(inv: Invocation, out: IO[str] | None = None) -> int:
+    """Decompose as the original does: the output file (or iHTN files) and the console reports."""
+    from .mission import Mission
+    from .output import OutputModel, write_output
+
+    out = out if out is not None else sys.stdout
+    hddl, gm, cfg = inv.files
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=True)  # the original repairs XML silently
+    for warning in (*mission.warnings, *mission.initial_state.warnings):
+        print(f"warning: {warning}", file=sys.stderr)
+    with phase("expanding the mission"):
+        tg, constraints = mission.task_graph, mission.constraints
+    if inv.verbose:
+        _trace_mission(mission, out)
+    if inv.pretty:
+        console.print_task_instances(tg, mission.domain, out)
+        console.print_constraints(tg, constraints, out)
+    with phase("solving"):
+        result = mission.decompose(_every_decomposition(inv.algorithm))
+        decompositions = list(result.decompositions)
+    if inv.verbose:
+        console.print_constraints(tg, constraints, out)
+        console.print_trace_decompositions(tg, decompositions, out)
+    if inv.pretty:
+        console.print_mission_decompositions(tg, decompositions, out)
+    model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state)
+    if inv.ihtn:
+        _write_ihtns(model, inv.ihtn_max)
+    else:
+        with phase("writing the output"):
+            write_output(model, mission.output_path(), mission.config.output.file_type)
+    return 0
+
+
+def _every_decomposition(algorithm: Algorithm) -> DecompositionRequest:
+    """Every valid mission decomposition, as the original lists them (the exploratory
+    decomposer always lists all; CP-SAT is told to)."""
+    if algorithm == Algorithm.EXPLORATORY:
+        return DecompositionRequest(algorithm=algorithm)
+    return DecompositionRequest(algorithm=algorithm, limit=None)
+
+
+def _trace_mission(mission, out) -> None:
+    """``-v``: the inputs and every stage up to the Task Graph."""
+    files = {"domain": mission.domain.source, "goal model": mission.goal_model.source,
+             "configuration": str(mission.config_path), "world": str(mission.world_path or "")}
+    console.print_inputs(mission.domain, files, out)
+    console.print_expansion(mission.expansion.rat.render(), mission.expansion.instances, out)
+    console.print_decomposition_paths(mission.task_graph, out)
+    console.print_world_state(mission.initial_state, out)
+    console.print_task_graph(mission.task_graph, out)
+
+
+def _write_ihtns(model, maximum: int) -> None:
+    from .ihtn import refuse_oversized_export, write_ihtns
+
+    with phase("counting iHTN files"):
+        refuse_oversized_export(model, False, maximum, str(IHTN_FOLDER))
+    with phase("exporting iHTNs"):
+        write_ihtns(model, IHTN_FOLDER)
+
+
+def _report(err: BaseException) -> int:
+    """Why the command stopped, on stdout as the original prints its messages (the plug-in
+    shows stdout), and the exit status."""
+    match err:
+        case Interrupted(during=during):
+            print(f"interrupted{' while ' + during if during else ''} ({err}): no output was written")
+            return err.exit_code
+        case MissionError(problems=problems):
+            for problem in problems:
+                print(f"error: {problem}")
+            return err.exit_code
+        case RecursionError():
+            print("error: the mission is nested too deeply to process")
+            return 2
+        case OSError():
+            print(f"error: {err.filename or ''}: {err.strerror or err}")
+            return 2
+    raise err
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``mutrose`` with ``argv`` (without the program name) and return its exit status."""
+    with command_settings():
+        usable_stderr()
+        if hasattr(signal, "SIGXFSZ"):
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write over a size limit fails with EFBIG
+        try:
+            return _command(sys.argv[1:] if argv is None else list(argv))
+        except BrokenPipeError:
+            return _stdout_closed()
+
+
+def _command(argv: list[str]) -> int:
+    try:
+        inv = parse(argv)
+        _openable(inv.files)
+    except Usage as usage:
+        print(usage)
+        return usage.status
+    try:
+        with signal_handlers(), input_limit(INPUT_LIMIT_MB * MB):
+            return run(inv)
+    except BrokenPipeError:
+        raise
+    except (Interrupted, MissionError, RecursionError, OSError) as err:
+        return _report(err)
+
+
+def _stdout_closed() -> int:
+    """The reader of stdout went away (``mutrose … -p | head``): say so on stderr, and send
+    what is left to print nowhere, so that the exit does not fail a second time."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    print("error: standard output: the reader closed the pipe; the output was not written", file=sys.stderr)
+    return 2
+
+
+def entry() -> None:
+    """The ``mutrose`` console script."""
+    exit_process(main())
+
+
+if __name__ == "__main__":
+    entry()
