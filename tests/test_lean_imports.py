@@ -30,7 +30,8 @@ def _loaded(args: list[str], cwd: Path) -> tuple[int, set[str]]:
     return status, set(modules)
 
 
-@pytest.mark.parametrize("command", [["decompose"], ["count"], ["check"], ["decompose", "--algorithm", "exploratory"]])
+@pytest.mark.parametrize("command", [["decompose"], ["count"], ["check"], ["decompose", "--algorithm", "exploratory"],
+                                     ["compare"]])
 def test_commands_on_a_reference_mission_load_no_heavy_module(tmp_path, command):
     mission = require_reference() / "missions" / "room-preparation"
     out = ["-o", str(tmp_path / "out.json")] if command[0] == "decompose" else []

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
+import shutil
 import signal
 import sys
 import time
@@ -327,6 +329,31 @@ def cmd_count(args: argparse.Namespace) -> int:
     return 3 if total == 0 and mission.task_graph.tasks() else 0
 
 
+def cmd_compare(args: argparse.Namespace) -> int:
+    """Run the decomposers on the mission and compare them (``compare.py``); the report as a
+    table, or as JSON with ``--json``.  Exit 0 when all that finished agree, 1 when not."""
+    from .compare import CompareRequest, compare
+    from .compare_report import plot_format, render_table, report_json, write_plot
+
+    hddl, gm, cfg, _folder = _inputs(args)
+    if args.plot:
+        plot_format(args.plot)  # before anything runs
+    original = None
+    if args.original:
+        found = shutil.which(args.original)
+        if found is None:
+            raise MissionError("--original: not an executable file (the original tool, run as PATH HDDL GM CONFIG)",
+                               args.original)
+        original = Path(found).resolve()
+    request = CompareRequest(hddl, gm, cfg, time_limit=args.time_limit, limit=args.limit or None, original=original,
+                             lenient_xml=args.lenient_xml, max_input_mb=args.max_input_mb)
+    report = compare(request, None if args.quiet else lambda message: print(message, file=sys.stderr))
+    if args.plot:
+        write_plot(report, args.plot)
+    print(json.dumps(report_json(report), sort_keys=True) if args.json else render_table(report))
+    return report.exit_status
+
+
 MAX_COUNT = 2**62  # beyond any listing that fits on a disk; CP-SAT's limits are 64-bit
 
 
@@ -342,6 +369,17 @@ def _count_option(minimum: int):
             raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {MAX_COUNT}")
         return value
     return parse
+
+
+def _seconds(text: str) -> float:
+    """An argparse type: a positive number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
+    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -405,6 +443,31 @@ def build_parser() -> argparse.ArgumentParser:
     common(p)
     p.set_defaults(func=cmd_validate)
     p.usage = "mutrose-cp validate [-h] [--config CONFIG] [-q] [--json-summary] (HDDL GM CONFIG | MISSION_DIR) OUTPUT"
+
+    from .compare import DEFAULT_LIMIT as COMPARE_LIMIT, DEFAULT_TIME_LIMIT
+
+    p = sub.add_parser("compare", help="run both decomposers (and the original tool) on the mission, each in its "
+                                       "own process, and compare time, memory and results")
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
+    p.add_argument("--config", help="in a mission folder with several configurations, the one to use")
+    p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
+    p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
+    p.add_argument("--lenient-xml", action="store_true", help="passed to the decomposers (see decompose)")
+    p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+                   help="refuse input files larger than this (default 256)")
+    p.add_argument("--time-limit", type=_seconds, default=DEFAULT_TIME_LIMIT, metavar="S",
+                   help=f"wall-time limit of each run in seconds (default {DEFAULT_TIME_LIMIT:g}); a run over it "
+                        "is killed")
+    p.add_argument("--limit", type=_count_option(0), default=COMPARE_LIMIT, metavar="K",
+                   help="compare the sets of decompositions up to K of them, else only their counts "
+                        f"(default {COMPARE_LIMIT}; 0 = always)")
+    p.add_argument("--original", metavar="PATH",
+                   help="also run this binary of the original tool (as PATH HDDL GM CONFIG, in a copy of the mission)")
+    p.add_argument("--json", action="store_true", help="print the report as one JSON object instead of a table")
+    p.add_argument("--plot", metavar="FILE", help="bar chart of time and memory: FILE.png, .svg or .pdf (needs matplotlib)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
+    p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("graph", help="draw the expanded goal model, the Task Graph or one decomposition")
     common(p)

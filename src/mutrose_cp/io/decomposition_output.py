@@ -64,6 +64,9 @@ class OutputConstraint:
     first: str
     second: str
     where: str  # "constraints[4]"
+    # an EC's flags as written; None where the file leaves one out
+    group: bool | None = None
+    divisible: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -150,7 +153,9 @@ def _from_json(doc: dict[str, Any], source: str) -> DecompositionOutput:
         kind = str(c.get("type"))
         if kind == "EC" and "group" not in c and "divisible" not in c:
             kind = "FB"  # the original writes a fallback constraint as an EC without group/divisible
-        constraints.append(OutputConstraint(kind, str(inst["t0"]), str(inst["t1"]), f"constraints[{i}]"))
+        group, divisible = (_flag(c[flag]) if flag in c else None for flag in ("group", "divisible"))
+        constraints.append(OutputConstraint(kind, str(inst["t0"]), str(inst["t1"]), f"constraints[{i}]", group,
+                                            divisible))
     mds = tuple(tuple(str(k) for k in _list(md)) for md in _list(doc.get("mission_decompositions")))
     return DecompositionOutput(source, tasks, tuple(constraints), mds)
 
@@ -197,6 +202,7 @@ def _from_xml(data: bytes, source: str) -> DecompositionOutput:
         kind = (c.findtext("type") or "").strip()
         if kind == "EC" and c.find("group") is None and c.find("divisible") is None:
             kind = "FB"  # a fallback constraint, as in the JSON form
-        constraints.append(OutputConstraint(kind, ends[0], ends[1], f"line {source_line(c)}"))
+        group, divisible = (None if c.find(flag) is None else _flag(c.findtext(flag)) for flag in ("group", "divisible"))
+        constraints.append(OutputConstraint(kind, ends[0], ends[1], f"line {source_line(c)}", group, divisible))
     mds = tuple(tuple(_texts(d.find("tasks"))) for d in root.findall("mission_decompositions/*"))
     return DecompositionOutput(source, tasks, tuple(constraints), mds)
