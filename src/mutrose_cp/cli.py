@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Sequence
 
 from . import __version__
-from .errors import MissionError
+from .errors import MissionError, Problem
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
@@ -98,13 +98,30 @@ def cmd_check(args: argparse.Namespace) -> int:
     exp = mission.expansion
     _ = mission.task_graph
     _ = mission.constraints
-    _warn(args, mission)
+    if not args.strict:
+        _warn(args, mission)
+    _check_domain(args, mission)
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "check", "valid": True, "task_instances": len(exp.instances),
                     "seconds": round(elapsed, 3)},
              f"ok: {hddl.name}, {gm.name}, {cfg.name} are valid ({len(exp.instances)} task instances, "
              f"{elapsed:.2f} s)", mission)
     return 0
+
+
+def _check_domain(args: argparse.Namespace, mission: Mission) -> None:
+    """The domain's warnings (``domain_warnings``); with ``--strict`` every warning of the
+    mission is an error instead (exit 2)."""
+    from .domain_warnings import domain_warnings
+
+    found = domain_warnings(mission.domain, mission.goal_model)
+    if args.strict:
+        warned = [Problem("", w) for w in (*mission.warnings, *mission.initial_state.warnings)]
+        if warned or found:
+            raise MissionError([*warned, *found])
+    elif not args.quiet:
+        for problem in found:
+            print(f"warning: {problem}", file=sys.stderr)
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -372,6 +389,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
     common(p)
+    p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("decompose", help="decompose the mission and write the output file")
