@@ -430,7 +430,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--index", type=int, default=0, help="decomposition view: which valid decomposition (0-based)")
     p.add_argument("-o", "--output", required=True, help="FILE.svg, FILE.png (needs graphviz) or FILE.dot")
     p.set_defaults(func=cmd_graph)
+
+    p = sub.add_parser("export-hddl", help="write the domain (and the mission's problem) as standard HDDL")
+    p.add_argument("input", metavar="INPUT", help="the HDDL domain, or a mission folder")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.hddl", help="the standard HDDL domain to write")
+    p.add_argument("--gm", help="the goal model (with --config: also write the problem); in a folder, which one")
+    p.add_argument("--config", help="the configuration (with --gm); in a mission folder, which one")
+    p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
+    p.add_argument("--problem-out", metavar="FILE", help="the problem file (default OUT-problem.hddl); exit 2 "
+                                                         "when the mission has no problem form")
+    p.add_argument("--lenient-xml", action="store_true", help="as for check")
+    p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+                   help="refuse input files larger than this (default 256)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no warnings and no summary on stderr")
+    p.set_defaults(func=cmd_export_hddl)
     return parser
+
+
+def cmd_export_hddl(args: argparse.Namespace) -> int:
+    from .hddl_export import export_hddl
+
+    return export_hddl(args)
 
 
 def entry() -> None:
