@@ -8,6 +8,7 @@ own reader reads each exported domain back to the same model, up to the document
 from __future__ import annotations
 
 import dataclasses
+import shutil
 from pathlib import Path
 
 import pytest
@@ -216,3 +217,19 @@ def test_a_bad_domain_is_a_located_error(capsys, tmp_path: Path):
     hddl.write_text("(define (domain d)\n  (:action a :parameters (?x - nosuchtype)))\n")
     assert main(["export-hddl", str(hddl), "-o", str(tmp_path / "out.hddl")]) == 2
     assert f"error: {hddl}:2:32: unknown type 'nosuchtype'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("context", "reason"), [
+    ('assertion trigger \\"SampleReady\\"', "task AT1_1 runs when the event SampleReady occurs"),
+    ('assertion condition \\"current_delivery.ready\\"', "goal G7 has the context condition current_delivery.ready"),
+])
+def test_events_and_context_conditions_have_no_network(capsys, tmp_path: Path, context: str, reason: str):
+    folder = tmp_path / "lab"
+    shutil.copytree(require_reference() / "missions" / "lab-samples-logistics", folder)
+    gm = folder / "gm" / "LabSampleLogistics.txt"
+    text = gm.read_text()
+    before = '"Monitors": "current_nurse, pickup_location"'
+    assert text.count(before) == 1
+    gm.write_text(text.replace(before, f'"CreationCondition": "{context}",\n            {before}'))
+    assert main(["export-hddl", str(folder), "-o", str(tmp_path / "d.hddl"), "--problem-out", str(tmp_path / "p.hddl")]) == 2
+    assert f"error: {reason}" in capsys.readouterr().err

@@ -10,8 +10,8 @@ hold); an HDDL initial state is closed, so such facts are false for a planner.
 The task network is the mission's task instances, in goal-model order, when the runtime
 annotations make them one total order (only ``;`` joins goals that hold tasks).  A parallel
 (``#``, a ``forAll`` over several elements), fallback or OR-decomposed goal over several tasks,
-a task that waits for an event, or a parameter bound to a collection has no form in a single
-ordered network: :class:`ProblemNotExpressible` says which one and where.  A parameter the
+a goal with a context condition, a task that waits for an event, or a parameter bound to a
+collection has no form in a single ordered network: :class:`ProblemNotExpressible` says which one and where.  A parameter the
 mission leaves unbound (the robots, chosen by the allocator) becomes a variable of the network.
 """
 from __future__ import annotations
@@ -33,6 +33,10 @@ def mission_problem(mission: Mission) -> tuple[ProblemData, list[str]]:
     """The HDDL problem of ``mission`` and the warnings about it (objects left out)."""
     domain = mission.domain
     order = _total_order(mission.expansion.rat)
+    for node in mission.goal_model.nodes:
+        if node.context is not None and node.context.kind == "condition":
+            raise ProblemNotExpressible(f"goal {node.id} has the context condition {node.context.text}: its tasks "
+                                        "run only when it holds, and an HDDL task network has no conditional tasks")
     if not order:
         raise ProblemNotExpressible("the mission has no task instances (no world entity matched its queries): "
                                     "there is no task network to plan for")
