@@ -18,7 +18,8 @@ from conftest import REFERENCE, ROOT, require_reference
 from mutrose_cp.cli import main
 from mutrose_cp.io.hddl import load_domain, parse_domain
 from mutrose_cp.io.hddl_writer import HddlExport
-from mutrose_cp.model import Domain
+from mutrose_cp.hddl_problem import initial_facts
+from mutrose_cp.model import Domain, GroundLiteral, InitialState
 
 
 def _domain_files() -> list[Path]:
@@ -116,12 +117,12 @@ DIALECT = """(define (domain dialect)
   (:action move :parameters (?r - robot ?x - room) :required-capabilities (arms)
      :precondition (and (at ?r ?x) (hascapability ?r) (> (charge ?r) 0))
      :effect (and (not (p ?x)) (p ?x ?x) (decrease (charge ?r) 1)))
-  (:method m :parameters (?r - robot ?x - room) :task (T ?r ?x)
+  (:method m :parameters (?r - robot ?x - room) :task (Step ?r ?x)
      :precondition (and (not (p ?x)))
      :effect (and (p ?x))
      :subtasks (and (move ?r ?x) (s2 (move ?r ?x)) (s3 (move ?r)))
      :ordering (and (s2 < s3)))
-  (:task T :parameters (?r - robot ?x - room))
+  (:task Step :parameters (?r - robot ?x - room))
   (:predicates (p ?x - room) (p ?x - room ?y - room))
   (:functions (charge ?r - robot))
   (:types room - object)
@@ -139,9 +140,10 @@ def test_the_dialect_rewrites_parse_with_unified_planning(tmp_path: Path):
     assert "; MutRoSe capabilities: arms" in text and "; required capabilities: arms" in text
     assert "(p-2 ?x - room ?y - room)" in text and "(p-2 ?x ?x)" in text  # the second arity renamed
     assert "(at ?a1 - object ?a2 - object)" in text and "(hascapability ?a1 - object)" in text
-    # the method's effect is an action, first in the network, before every other subtask
+    # the method's effect is an action, first in the network, before every other subtask; the id
+    # given to the unnamed subtask is not 'step', which HDDL readers would take for the task Step
     assert "(:action method-effects-m" in text
-    assert ":ordering (and (< method-effects step) (< method-effects s2) (< method-effects s3) (< s2 s3))" in text
+    assert ":ordering (and (< method-effects step-2) (< method-effects s2) (< method-effects s3) (< s2 s3))" in text
     assert "(s3 (move ?r ?x-2))" in text and "?x-2 - room" in text  # the missing argument
     assert len(export.warnings) == 5, export.warnings  # at, hascapability, p-2, effects, ?x-2
     out = tmp_path / "dialect.hddl"
@@ -233,3 +235,17 @@ def test_events_and_context_conditions_have_no_network(capsys, tmp_path: Path, c
     gm.write_text(text.replace(before, f'"CreationCondition": "{context}",\n            {before}'))
     assert main(["export-hddl", str(folder), "-o", str(tmp_path / "d.hddl"), "--problem-out", str(tmp_path / "p.hddl")]) == 2
     assert f"error: {reason}" in capsys.readouterr().err
+
+
+def test_the_initial_state_holds_the_true_facts_the_world_states():
+    """Closed world: a false fact is left out; the first literal of an atom decides, as in the
+    decomposer; facts about objects the problem does not declare are left out with a warning."""
+    state = InitialState(sorts={}, literals=(
+        GroundLiteral("clean", ("RoomA",)), GroundLiteral("clean", ("RoomB",), False),
+        GroundLiteral("clean", ("RoomA",), False), GroundLiteral("clean", ("Ghost",)),
+    ), functions=((("objects", ("RoomA",)), 2), (("objects", ("RoomA",)), 5), (("objects", ("RoomB",)), 1.5)))
+    warnings: list[str] = []
+    facts, values = initial_facts(state, {"RoomA", "RoomB"}, warnings)
+    assert facts == (("clean", ("RoomA",)),)
+    assert values == (("objects", ("RoomA",), 2), ("objects", ("RoomB",), 1.5))
+    assert warnings == ["facts about Ghost, which are no declared objects, are left out"]

@@ -50,7 +50,7 @@ def mission_problem(mission: Mission) -> tuple[ProblemData, list[str]]:
         step, variables = _step(domain, instances[instance_id], known)
         network.append(step)
         parameters += variables
-    facts, values = _initial_state(mission.initial_state, known, warnings)
+    facts, values = initial_facts(mission.initial_state, known, warnings)
     comments: tuple[str, ...] = ()
     robot_sorts = domain.robot_sorts
     if parameters and not any(sort in robot_sorts for _, sort in objects):
@@ -139,7 +139,7 @@ def _ancestors(sort: str, parent_of: dict[str, str | None]) -> list[str]:
     return chain
 
 
-def _initial_state(state: InitialState, known: set[str], warnings: list[str]) -> tuple[
+def initial_facts(state: InitialState, known: set[str], warnings: list[str]) -> tuple[
         tuple[tuple[str, tuple[str, ...]], ...], tuple[tuple[str, tuple[str, ...], int | float], ...]]:
     """The true facts and the function values, over declared objects only."""
     facts = tuple((p, args) for (p, args), positive in state.fact_map().items() if positive)
