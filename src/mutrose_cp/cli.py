@@ -439,7 +439,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
     p.add_argument("--problem-out", metavar="FILE", help="the problem file (default OUT-problem.hddl); exit 2 "
                                                          "when the mission has no problem form")
-    p.add_argument("--lenient-xml", action="store_true", help="as for check")
+    p.add_argument("--lenient-xml", action="store_true",
+                   help="read XML whose repair changes its records, as the original does (see check)")
     p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
                    help="refuse input files larger than this (default 256)")
     p.add_argument("-q", "--quiet", action="store_true", help="no warnings and no summary on stderr")
