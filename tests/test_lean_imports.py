@@ -31,10 +31,11 @@ def _loaded(args: list[str], cwd: Path) -> tuple[int, set[str]]:
 
 
 @pytest.mark.parametrize("command", [["decompose"], ["count"], ["check"], ["decompose", "--algorithm", "exploratory"],
-                                     ["compare"]])
+                                     ["compare"], ["export-hddl"]])
 def test_commands_on_a_reference_mission_load_no_heavy_module(tmp_path, command):
     mission = require_reference() / "missions" / "room-preparation"
-    out = ["-o", str(tmp_path / "out.json")] if command[0] == "decompose" else []
+    out = {"decompose": ["-o", str(tmp_path / "out.json")], "export-hddl": ["-o", str(tmp_path / "out.hddl")]}.get(
+        command[0], [])
     status, modules = _loaded([*command, str(mission), "-q", *out], tmp_path)
     assert status in (0, 3)
     assert not modules & set(HEAVY), sorted(modules & set(HEAVY))

@@ -101,13 +101,30 @@ def cmd_check(args: argparse.Namespace) -> int:
     exp = mission.expansion
     _ = mission.task_graph
     _ = mission.constraints
-    _warn(args, mission)
+    if not args.strict:
+        _warn(args, mission)
+    _check_domain(args, mission)
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "check", "valid": True, "task_instances": len(exp.instances),
                     "seconds": round(elapsed, 3)},
              f"ok: {hddl.name}, {gm.name}, {cfg.name} are valid ({len(exp.instances)} task instances, "
              f"{elapsed:.2f} s)", mission)
     return 0
+
+
+def _check_domain(args: argparse.Namespace, mission: Mission) -> None:
+    """The domain's warnings (``domain_warnings``); with ``--strict`` every warning of the
+    mission is an error instead (exit 2)."""
+    from .domain_warnings import domain_warnings
+
+    found = domain_warnings(mission.domain, mission.goal_model)
+    if args.strict:
+        warned = [Problem("", w) for w in (*mission.warnings, *mission.initial_state.warnings)]
+        if warned or found:
+            raise MissionError([*warned, *found])
+    elif not args.quiet:
+        for problem in found:
+            print(f"warning: {problem}", file=sys.stderr)
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -406,6 +423,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
     common(p)
+    p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("decompose", help="decompose the mission and write the output file")
@@ -475,7 +493,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--index", type=int, default=0, help="decomposition view: which valid decomposition (0-based)")
     p.add_argument("-o", "--output", required=True, help="FILE.svg, FILE.png (needs graphviz) or FILE.dot")
     p.set_defaults(func=cmd_graph)
+
+    p = sub.add_parser("export-hddl", help="write the domain (and the mission's problem) as standard HDDL")
+    p.add_argument("input", metavar="INPUT", help="the HDDL domain, or a mission folder")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.hddl", help="the standard HDDL domain to write")
+    p.add_argument("--gm", help="the goal model (with --config: also write the problem); in a folder, which one")
+    p.add_argument("--config", help="the configuration (with --gm); in a mission folder, which one")
+    p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
+    p.add_argument("--problem-out", metavar="FILE", help="the problem file (default OUT-problem.hddl); exit 2 "
+                                                         "when the mission has no problem form")
+    p.add_argument("--lenient-xml", action="store_true",
+                   help="read XML whose repair changes its records, as the original does (see check)")
+    p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+                   help="refuse input files larger than this (default 256)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no warnings and no summary on stderr")
+    p.set_defaults(func=cmd_export_hddl)
     return parser
+
+
+def cmd_export_hddl(args: argparse.Namespace) -> int:
+    from .hddl_export import export_hddl
+
+    return export_hddl(args)
 
 
 def entry() -> None:

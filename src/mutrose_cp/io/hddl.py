@@ -28,6 +28,7 @@ from ..model.domain import (
     Parameter,
     Precondition,
     Subtask,
+    TypeMention,
 )
 from .grammar import cached_lalr_parser
 from .text import decode_utf8, read_bytes
@@ -131,7 +132,7 @@ def _deepest_paren(text: str) -> tuple[int, int, int]:
     return at[0], at[1], deepest
 
 
-def _signature(name: str, parameters: Iterable[Parameter]) -> str:
+def signature(name: str, parameters: Iterable[Parameter]) -> str:
     """``(name ?a - t1 ?b - t2)`` as declared."""
     return "(" + " ".join([name, *(f"{p.name} - {p.type}" for p in parameters)]) + ")"
 
@@ -256,7 +257,7 @@ class _DomainReader:
         self.capabilities: list[str] = []
         self.constants: list[tuple[str, str]] = []
         self._type_groups: list[tuple[list[str], str | None]] = []
-        self._mentioned_sorts: list[str] = []  # sorts used in declarations, first-mention order
+        self._mentioned_sorts: dict[str, Token] = {}  # sort -> its first mention in a declaration
         self._known_types: set[str] = set()
         self.tasks: dict[str, AbstractTask] = {}
         self.actions: dict[str, Action] = {}
@@ -305,6 +306,7 @@ class _DomainReader:
             tasks=tuple(self.tasks.values()),
             actions=tuple(self.actions.values()),
             methods=tuple(methods),
+            undeclared_types=self._undeclared_types(),
         )
 
     def _read_declarations(self, sections: list[Tree[Token]]) -> list[Tree[Token]]:
@@ -348,9 +350,8 @@ class _DomainReader:
 
     # ---- declarations
 
-    def _mention_sort(self, sort: str) -> None:
-        if sort not in self._mentioned_sorts:
-            self._mentioned_sorts.append(sort)
+    def _mention_sort(self, sort: Token) -> None:
+        self._mentioned_sorts.setdefault(sort.value, sort)
 
     def _read_types(self, section: Tree[Token]) -> None:
         pending: list[str] = []
@@ -363,7 +364,7 @@ class _DomainReader:
                 self._error(minus, f"'- {parent}' is not preceded by any type name")
                 continue
             self._type_groups.append((pending, parent.value))
-            self._mention_sort(parent.value)
+            self._mention_sort(parent)
             pending = []
         if pending:
             self._type_groups.append((pending, None))
@@ -371,15 +372,16 @@ class _DomainReader:
     def _read_constants(self, section: Tree[Token]) -> None:
         for group in _trees(section.children):
             *names, _minus, sort = _tokens(group.children)
-            self._mention_sort(sort.value)
+            self._mention_sort(sort)
             self.constants.extend((n.value, sort.value) for n in names)
 
     def _read_declaration(self, decl: Tree[Token]) -> Declaration:
-        name, typed_vars = decl.children
-        parameters = tuple(Parameter(v.value, t.value) for v, t in self._typed_vars(_tree(typed_vars)))
-        for parameter in parameters:
-            self._mention_sort(parameter.type)
-        return Declaration(_token(name).value, parameters)
+        name_node, typed_vars = decl.children
+        name = _token(name_node)
+        typed = self._typed_vars(_tree(typed_vars))
+        for _variable, sort in typed:
+            self._mention_sort(sort)
+        return Declaration(name.value, tuple(Parameter(v.value, t.value) for v, t in typed), *_position(name))
 
     def _build_types(self) -> tuple[tuple[str, str | None], ...]:
         """(type, parent) in declaration order, with the native sorts of hddl.md §2.1.
@@ -407,6 +409,13 @@ class _DomainReader:
                 types.append((sort, None))
                 known.add(sort)
         return tuple(types)
+
+    def _undeclared_types(self) -> tuple[TypeMention, ...]:
+        """The sorts mentioned but declared neither in ``:types`` nor natively (hddl.md §2.1),
+        each at its first mention."""
+        declared = {t for names, _ in self._type_groups for t in names} | set(_NATIVE_TYPES)
+        return tuple(TypeMention(sort, *_position(token))
+                     for sort, token in self._mentioned_sorts.items() if sort not in declared)
 
     def _typed_vars(self, tree: Tree[Token]) -> list[tuple[Token, Token]]:
         pairs: list[tuple[Token, Token]] = []
@@ -547,7 +556,7 @@ class _DomainReader:
             ids.add(subtask_id)
             self._check_variables(args, body)
             self._check_callee(callee, len(args), body)
-            subtasks.append(Subtask(subtask_id, callee.value, _values(args)))
+            subtasks.append(Subtask(subtask_id, callee.value, _values(args), *_position(callee)))
         return tuple(subtasks), ordered
 
     def _check_callee(self, callee: Token, arity: int, body: _Body) -> None:
@@ -565,7 +574,7 @@ class _DomainReader:
                 callee,
                 f"subtask {callee.value} in method '{body.name}' is given {_count(arity, 'argument')} "
                 f"but declares only {_count(len(declared.parameters), 'parameter')}: "
-                f"{_signature(declared.name, declared.parameters)}; remove the extra arguments",
+                f"{signature(declared.name, declared.parameters)}; remove the extra arguments",
             )
 
     def _ordering(
@@ -612,7 +621,7 @@ class _DomainReader:
         arities = sorted({len(d.parameters) for d in matching})
         if arity not in arities:
             declared = " or ".join(str(a) for a in arities)
-            signatures = " or ".join(_signature(d.name, d.parameters) for d in matching)
+            signatures = " or ".join(signature(d.name, d.parameters) for d in matching)
             self._error(
                 name,
                 f"{what} '{name.value}' is used with {_count(arity, 'argument')} in {body.kind} "

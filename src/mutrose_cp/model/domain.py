@@ -7,7 +7,7 @@ a domain is read once and shared by every stage.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 
@@ -58,10 +58,13 @@ Precondition = Literal | Comparison
 
 @dataclass(frozen=True)
 class Declaration:
-    """A predicate or function declaration ``(name ?a - t1 ?b - t2)``."""
+    """A predicate or function declaration ``(name ?a - t1 ?b - t2)``; the position is where
+    its name is written (not part of its identity)."""
 
     name: str
     parameters: tuple[Parameter, ...]
+    line: int = field(default=0, compare=False)
+    column: int = field(default=0, compare=False)
 
 
 @dataclass(frozen=True)
@@ -88,13 +91,26 @@ class Action:
     column: int = 0
 
 
+GENERATED_SUBTASK_ID = "__t_id_"
+"""Prefix of the ids given to subtasks written without one (``__t_id_<n>``, as the original)."""
+
+
 @dataclass(frozen=True)
 class Subtask:
-    """One step of a method's task network; ``id`` is the declared id or ``__t_id_<n>``."""
+    """One step of a method's task network; ``id`` is the declared id or ``__t_id_<n>``; the
+    position is where the called task's name is written (not part of the step's identity)."""
 
     id: str
     task: str
     args: tuple[str, ...]
+    line: int = field(default=0, compare=False)
+    column: int = field(default=0, compare=False)
+
+    @property
+    def named(self) -> bool:
+        """Whether the domain gave the step an id (``(s1 (task ...))``); generated ids start
+        with ``__t_id_``, which no HDDL name can."""
+        return not self.id.startswith(GENERATED_SUBTASK_ID)
 
 
 @dataclass(frozen=True)
@@ -117,6 +133,16 @@ class Method:
 
 
 @dataclass(frozen=True)
+class TypeMention:
+    """Where a sort is first used without being declared in ``:types`` (hddl.md §2.1: the
+    decomposer, like PANDA, makes it a root type; standard HDDL readers reject it)."""
+
+    name: str
+    line: int
+    column: int
+
+
+@dataclass(frozen=True)
 class Domain:
     """An HDDL domain as read, with indexes the decomposition looks things up by."""
 
@@ -132,6 +158,8 @@ class Domain:
     tasks: tuple[AbstractTask, ...]
     actions: tuple[Action, ...]
     methods: tuple[Method, ...]  # declaration order
+    # sorts used (type parents, constants, predicate and function parameters) but not declared
+    undeclared_types: tuple[TypeMention, ...] = field(default=(), compare=False)
 
     @cached_property
     def parent_of(self) -> dict[str, str | None]:

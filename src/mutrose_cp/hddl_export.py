@@ -1,0 +1,92 @@
+"""``mutrose-cp export-hddl``: a MutRoSe domain as standard HDDL, and the mission as a problem.
+
+The domain alone needs only the HDDL file.  Given the mission too (a mission folder, or the
+HDDL file with ``--gm`` and ``--config``), a problem file is written beside the domain
+(``OUT-problem.hddl``, or ``--problem-out``) when the mission has one
+(:mod:`mutrose_cp.hddl_problem`); when it has none, the reason is printed and the command still
+succeeds, unless ``--problem-out`` asked for the problem explicitly (exit 2).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+from .errors import MissionError
+from .hddl_problem import ProblemNotExpressible, mission_problem
+from .io.hddl import load_domain
+from .io.hddl_writer import HddlExport
+from .mission import Mission, find_mission_files
+from .output_file import atomic_writer
+
+
+def _mission_files(args: argparse.Namespace) -> tuple[Path, tuple[Path, Path] | None]:
+    """(HDDL, (goal model, configuration) or None) from the command's input and options."""
+    given = Path(args.input)
+    if given.is_dir():
+        hddl, gm, config = find_mission_files(given, args.config, hddl_name=args.hddl, gm_name=args.gm)
+        return hddl, (gm, config)
+    if (args.gm is None) != (args.config is None):
+        raise MissionError("the problem needs both the goal model and the configuration: give --gm GM and "
+                           "--config CONFIG, or neither for the domain alone")
+    if args.hddl is not None:
+        raise MissionError("--hddl chooses the domain of a mission folder; the domain given here is the file "
+                           f"{given}")
+    return given, ((Path(args.gm), Path(args.config)) if args.gm is not None else None)
+
+
+def _problem_path(args: argparse.Namespace) -> Path:
+    if args.problem_out:
+        return Path(args.problem_out)
+    out = Path(args.output)
+    return out.with_name(f"{out.stem}-problem{out.suffix or '.hddl'}")
+
+
+def _refuse_overwriting(target: Path, inputs: list[Path]) -> None:
+    """An output that is one of the inputs would destroy it: refuse before writing."""
+    for path in inputs:
+        try:
+            if os.path.samefile(target, path):
+                raise MissionError(f"the output would overwrite the input {path}: choose another output file",
+                                   str(target))
+        except OSError:
+            continue
+
+
+def _write(path: Path, text: str) -> None:
+    with atomic_writer(path) as out:
+        out.write(text)
+
+
+def export_hddl(args: argparse.Namespace) -> int:
+    """Run the command; returns the exit status (errors are raised as :class:`MissionError`)."""
+    hddl, mission_files = _mission_files(args)
+    if args.problem_out and mission_files is None:
+        raise MissionError("--problem-out needs the mission: give --gm GM and --config CONFIG, or a mission folder")
+    inputs = [hddl, *(mission_files or ())]
+    outputs = [Path(args.output), *([_problem_path(args)] if mission_files else [])]
+    for target in outputs:
+        _refuse_overwriting(target, inputs)
+    mission = Mission.load(hddl, *mission_files, lenient_xml=args.lenient_xml) if mission_files else None
+    domain = mission.domain if mission is not None else load_domain(hddl)
+    export = HddlExport(domain)
+    _write(Path(args.output), export.domain_text())
+    written = [f"domain {args.output}"]
+    if mission is not None:
+        try:
+            problem, notes = mission_problem(mission)
+        except ProblemNotExpressible as why:
+            if args.problem_out:
+                raise
+            if not args.quiet:
+                print(f"note: no problem file: {why}", file=sys.stderr)
+        else:
+            export.warnings.extend(notes)
+            _write(outputs[1], export.problem_text(problem))
+            written.append(f"problem {outputs[1]}")
+    if not args.quiet:
+        for warning in export.warnings:
+            print(f"warning: {warning}", file=sys.stderr)
+        print(f"exported: {', '.join(written)} (standard HDDL)", file=sys.stderr)
+    return 0
