@@ -74,6 +74,35 @@ def task_places(mission: Mission, fleet: Fleet) -> set[str]:
     return {p for p in tasks if p} | {r.start for r in fleet.robots if r.start}
 
 
+def possible_decompositions(dm: DecompositionModel) -> set[str]:
+    """The decompositions CP-SAT's presolve does not rule out on the decomposition model alone
+    (a method whose precondition the world falsifies, say).  Leaving the others out keeps them
+    off every robot's route, which grows with the square of its jobs."""
+    from ..errors import NoDecompositionError
+    from ..solve.native import cmh
+
+    parameters = cmh.SatParameters()
+    parameters.stop_after_presolve = True
+    parameters.fill_tightened_domains_in_response = True
+    parameters.keep_all_feasible_solutions_in_presolve = True  # no solution removed "without loss"
+    parameters.num_workers = 1
+    solver = cmh.SolveWrapper()
+    solver.set_parameters(parameters)
+    response = solver.solve(dm.model.proto)
+    if response.status == cmh.CpSolverStatus.INFEASIBLE:
+        raise NoDecompositionError("no valid mission decomposition exists")
+    domains = response.tightened_variables
+    if len(domains) != len(dm.model.proto.variables):
+        return set(dm.decomposition)
+
+    def can_be_true(literal: object) -> bool:
+        index = literal.index  # type: ignore[attr-defined]
+        domain = list(domains[index if index >= 0 else -index - 1].domain)
+        return domain != ([0, 0] if index >= 0 else [1, 1])
+
+    return {d for d, literal in dm.decomposition.items() if can_be_true(literal)}
+
+
 def build_problem(dm: DecompositionModel, fleet: Fleet) -> AllocationProblem:
     """The jobs of every decomposition that can be chosen, with their candidate robots and the
     travel times between their places and the robots' starts."""
@@ -81,8 +110,9 @@ def build_problem(dm: DecompositionModel, fleet: Fleet) -> AllocationProblem:
     instances = {v.decomposition.id: v.decomposition.instance
                  for v in dm.mission.task_graph.decompositions() if v.decomposition is not None}
     jobs: dict[str, Job] = {}
+    possible = possible_decompositions(dm)
     for d, info in dm.decompositions_info.items():
-        if dm.decomposition[d] is dm.false:
+        if d not in possible:
             continue  # never part of a valid mission decomposition
         duration = sum(durations.of_action(a, caps) for a, caps in zip(info.actions, info.action_capabilities))
         candidates = tuple(r.name for r in fleet.robots if info.capabilities <= r.capabilities)
@@ -164,5 +194,6 @@ def fleet_problems(mission: Mission, fleet: Fleet) -> list[Problem]:
 def _unknown(fleet: Fleet, path: tuple[str | int, ...], what: str, name: str, known: set[str], *,
              key: bool = False) -> Problem:
     near = closest(name, known)
-    hint = f"Did you mean {near!r}?" if near else f"The mission's {what}s: {', '.join(sorted(known)) or 'none'}."
+    plural = {"capability": "capabilities", "place": "places", "action": "actions"}[what]
+    hint = f"Did you mean {near!r}?" if near else f"The mission's {plural}: {', '.join(sorted(known)) or 'none'}."
     return Problem(fleet.where(path, key=key), f"unknown {what} {name!r}", hint)

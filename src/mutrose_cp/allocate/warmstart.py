@@ -73,7 +73,8 @@ def greedy_plan(problem: AllocationProblem, chosen: list[str]) -> Plan | None:
             return free[r] + problem.time(robots[r], place[r], job.location)
 
         placed = [teams[p] for p in partners.get(j, []) if p in teams]
-        team = placed[0] if placed else tuple(sorted(job.candidates, key=lambda r: (arrival(r), r))[:job.robots.min])
+        able = [r for r in job.candidates if all(r in problem.jobs[p].candidates for p in partners.get(j, []))]
+        team = placed[0] if placed else tuple(sorted(able, key=lambda r: (arrival(r), r))[:job.robots.min])
         if len(team) < job.robots.min or not set(team) <= set(job.candidates) or len(team) > job.robots.max:
             return None
         ready = max([start[i] + problem.jobs[i].duration for i in before[j]] + [arrival(r) for r in team] + [0])
