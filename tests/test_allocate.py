@@ -265,3 +265,17 @@ def test_gantt_chart(tmp_path, suffix):
     assert status == 0
     head = chart.read_bytes()[:200]
     assert head.startswith(b"\x89PNG") if suffix == ".png" else b"<svg" in head or b"<?xml" in head
+
+
+def test_the_example_script_runs(capsys):
+    import runpy
+    import sys
+
+    argv = sys.argv
+    sys.argv = [str(ROOT / "examples" / "allocation.py")]
+    try:
+        runpy.run_path(str(ROOT / "examples" / "allocation.py"), run_name="__main__")
+    finally:
+        sys.argv = argv
+    out = capsys.readouterr().out
+    assert out.startswith("OPTIMAL: makespan 136, travel 214") and "picker:" in out

@@ -20,7 +20,8 @@ from .options import AllocationOptions
 from .problem import AllocationProblem, build_problem
 from .schedule import Schedule, compact
 from .search import Progress, SearchLimits, relative_gap, search
-from .warmstart import add_hint
+from .neighbourhood import restrict
+from .warmstart import add_hint, warm_start
 
 if TYPE_CHECKING:
     from ..mission import Mission
@@ -34,9 +35,10 @@ class Allocation:
     options: AllocationOptions
     status: str  # "OPTIMAL" (proven) or "FEASIBLE" (best found at the time limit)
     schedule: Schedule
-    cp_bound: float  # CP-SAT's proven lower bound on the objective
+    cp_bound: float | None  # CP-SAT's proven lower bound on the objective (None: restricted search)
     lp: LpBound | None
     seconds: dict[str, float] = field(default_factory=dict)
+    restricted: bool = False  # a large mission searched within near robots and places
 
     @property
     def objective(self) -> int:
@@ -50,7 +52,9 @@ class Allocation:
     @property
     def gap(self) -> float | None:
         """The gap to CP-SAT's bound (0 when proven optimal)."""
-        return 0.0 if self.status == "OPTIMAL" else relative_gap(self.objective, self.cp_bound)
+        if self.status == "OPTIMAL":
+            return 0.0
+        return relative_gap(self.objective, self.cp_bound)
 
     @property
     def lp_gap(self) -> float | None:
@@ -72,9 +76,11 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
     problem = build_problem(mission.decomposition_model(), fleet)
-    am = build_model(problem, options.objective)
-    if options.warm_start:
-        add_hint(am)
+    warm = warm_start(problem) if options.warm_start else None
+    restriction = restrict(problem, warm.teams if warm else None, warm.route_arcs(problem) if warm else None)
+    am = build_model(problem, options.objective, restriction)
+    if warm is not None:
+        add_hint(am, warm)
     seconds["model"] = time.perf_counter() - clock
     outcome = search(am, SearchLimits(options.time_limit, options.workers, options.seed), progress)
     seconds["search"] = outcome.seconds
@@ -82,6 +88,8 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
     lp = lp_bound(problem, options.objective) if options.lp_bound else None
     if lp is not None:
         seconds["lp"] = lp.seconds
+    if restriction.active:  # the restricted model's optimum and bound say nothing of the mission's
+        return Allocation(problem, options, "FEASIBLE", schedule, None, lp, seconds, restricted=True)
     return Allocation(problem, options, outcome.status, schedule, outcome.bound, lp, seconds)
 
 

@@ -30,6 +30,7 @@ from graphlib import CycleError, TopologicalSorter
 from ortools.sat.python import cp_model
 
 from .fleet import Robot
+from .neighbourhood import Restriction
 from .options import Objective
 from .problem import AllocationProblem, Job
 
@@ -53,6 +54,7 @@ class AllocationModel:
     problem: AllocationProblem
     model: cp_model.CpModel
     horizon: int
+    restriction: Restriction = Restriction()
     start: dict[str, cp_model.IntVar] = field(default_factory=dict)
     end: dict[str, cp_model.IntVar] = field(default_factory=dict)
     assign: dict[tuple[str, str], cp_model.IntVar] = field(default_factory=dict)
@@ -69,11 +71,13 @@ def horizon(problem: AllocationProblem) -> int:
     return sum(j.duration + longest for j in problem.jobs.values()) + longest + 1
 
 
-def build_model(problem: AllocationProblem, objective: Objective) -> AllocationModel:
+def build_model(problem: AllocationProblem, objective: Objective,
+                restriction: Restriction = Restriction()) -> AllocationModel:
     """Add the allocation to ``problem.dm.model`` and set ``objective`` (see the module
-    docstring).  A job with fewer able robots than it needs is excluded."""
+    docstring), within ``restriction`` (large missions, ``neighbourhood.py``).  A job with
+    fewer able robots than it needs is excluded."""
     dm = problem.dm
-    am = AllocationModel(problem, dm.model, horizon(problem))
+    am = AllocationModel(problem, dm.model, horizon(problem), restriction)
     for job in problem.jobs.values():
         _add_job(am, job)
     m = am.model
@@ -108,7 +112,7 @@ def _add_job(am: AllocationModel, job: Job) -> None:
     m.add(end == start + job.duration * chosen)
     am.start[job.id], am.end[job.id] = start, end
     team = []
-    for robot in job.candidates:
+    for robot in am.restriction.robots_of(am.problem, job.id):
         a = m.new_bool_var(f"assign[{job.id},{robot}]")
         m.add_implication(a, chosen)
         am.assign[(job.id, robot)] = a
@@ -161,7 +165,7 @@ def _route(am: AllocationModel, robot: Robot, located: list[Job], ruled_out: set
         circuit.append((node[job.id], 0, m.new_bool_var(f"last[{job.id},{robot.name}]")))
         candidates = [(START, robot.start)] + [(i.id, i.location) for i in located if i.id != job.id]
         for source, place in candidates:
-            if (source, job.id) in ruled_out:
+            if (source, job.id) in ruled_out or not (source == START or am.restriction.allows(source, job.id)):
                 continue
             literal = m.new_bool_var(f"route[{source or robot.name},{job.id}]")
             time = problem.time(robot, place, job.location)

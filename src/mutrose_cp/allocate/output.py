@@ -37,6 +37,7 @@ def objective_section(allocation: Allocation) -> dict[str, Any]:
         "gap": _number(allocation.gap),
         "lp_bound": _number(allocation.lp_value),
         "lp_gap": _number(allocation.lp_gap),
+        "restricted": allocation.restricted,
     }
 
 
@@ -86,8 +87,12 @@ def summary_line(allocation: Allocation) -> str:
     schedule = allocation.schedule
     busy = sum(1 for visits in schedule.routes.values() if visits)
     kind = allocation.options.objective.name
-    proof = "optimal" if allocation.status == "OPTIMAL" else (
-        f"best found at the time limit, bound {allocation.cp_bound:g}, gap {_percent(allocation.gap)}")
+    if allocation.status == "OPTIMAL":
+        proof = "optimal"
+    elif allocation.cp_bound is None:
+        proof = "best found at the time limit, search restricted to near robots and places"
+    else:
+        proof = f"best found at the time limit, bound {allocation.cp_bound:g}, gap {_percent(allocation.gap)}"
     value = f"{kind} {allocation.objective} ({proof})"
     if kind != "makespan":
         value += f", makespan {schedule.makespan}"

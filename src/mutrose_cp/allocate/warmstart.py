@@ -12,6 +12,7 @@ used up) is simply searched without a hint.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from graphlib import CycleError, TopologicalSorter
 
 from ..errors import MissionError
@@ -24,18 +25,36 @@ from .schedule import chosen_predecessors
 Plan = tuple[dict[str, tuple[str, ...]], dict[str, int]]  # teams and start times of the chosen jobs
 
 
-def add_hint(am: AllocationModel) -> bool:
-    """Hint the greedy schedule of the least-work decomposition to ``am``; False when there is
-    none (no hint is added)."""
-    problem = am.problem
+@dataclass(frozen=True)
+class WarmStart:
+    """The greedy schedule: the chosen jobs, their teams and start times."""
+
+    chosen: list[str]
+    teams: dict[str, tuple[str, ...]]
+    start: dict[str, int]
+
+    def route_arcs(self, problem: AllocationProblem) -> set[tuple[str, str]]:
+        """The arcs of every robot's route (from ``START`` for its first located job)."""
+        arcs: set[tuple[str, str]] = set()
+        for robot in problem.fleet.robots:
+            route = [j for j in sorted((j for j in self.chosen if robot.name in self.teams[j]),
+                                       key=lambda j: (self.start[j], j)) if problem.jobs[j].location is not None]
+            arcs |= set(zip([START] + route, route))
+        return arcs
+
+
+def warm_start(problem: AllocationProblem) -> WarmStart | None:
+    """The greedy schedule of the least-work decomposition; None when there is none."""
     chosen = least_work_decomposition(problem)
     if chosen is None:
-        return False
+        return None
     plan = greedy_plan(problem, chosen)
-    if plan is None:
-        return False
-    _hint(am, chosen, *plan)
-    return True
+    return None if plan is None else WarmStart(chosen, *plan)
+
+
+def add_hint(am: AllocationModel, warm: WarmStart) -> None:
+    """Hint ``warm`` to CP-SAT."""
+    _hint(am, warm)
 
 
 def least_work_decomposition(problem: AllocationProblem) -> list[str] | None:
@@ -110,8 +129,9 @@ def _partners(problem: AllocationProblem, chosen: set[str]) -> dict[str, list[st
     return out
 
 
-def _hint(am: AllocationModel, chosen: list[str], teams: dict[str, tuple[str, ...]], start: dict[str, int]) -> None:
+def _hint(am: AllocationModel, warm: WarmStart) -> None:
     m, dm, problem = am.model, am.problem.dm, am.problem
+    chosen, teams, start = warm.chosen, warm.teams, warm.start
     picked = set(chosen)
     for d, literal in dm.decomposition.items():
         if d in problem.jobs:
@@ -121,10 +141,8 @@ def _hint(am: AllocationModel, chosen: list[str], teams: dict[str, tuple[str, ..
     for j in chosen:
         m.add_hint(am.start[j], start[j])
         m.add_hint(am.end[j], start[j] + problem.jobs[j].duration)
-    for robot, arcs in am.arcs.items():
-        route = [j for j in sorted((j for j in chosen if robot in teams[j]), key=lambda j: (start[j], j))
-                 if problem.jobs[j].location is not None]
-        used = set(zip([START] + route, route))
+    used = warm.route_arcs(problem)
+    for arcs in am.arcs.values():
         for arc in arcs:
             m.add_hint(arc.literal, (arc.source, arc.target) in used)
 
