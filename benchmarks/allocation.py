@@ -37,7 +37,7 @@ RESULTS = ROOT / "benchmarks" / "results"
 DOC = ROOT / "docs" / "benchmarks-allocation.md"
 
 # (deliveries, robots, time limit in seconds)
-FULL = [(10, 5, 60), (20, 5, 60), (40, 10, 60), (80, 10, 60), (150, 20, 60), (300, 30, 60), (500, 50, 60)]
+FULL = [(10, 5, 60), (40, 10, 60), (80, 10, 60), (200, 25, 60), (500, 50, 60)]
 QUICK = [(4, 2, 10)]
 SPACING = 20  # metres between neighbouring grid places
 DURATIONS = {"navigate": 0, "pick-item": 30, "request-loading": 45, "give-item": 20, "drop-item": 10}

@@ -77,7 +77,8 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
     clock = time.perf_counter()
     problem = build_problem(mission.decomposition_model(), fleet)
     warm = warm_start(problem) if options.warm_start else None
-    restriction = restrict(problem, warm.teams if warm else None, warm.route_arcs(problem) if warm else None)
+    restriction = restrict(problem, warm.teams if warm else None,
+                           {(a, b) for _, a, b in warm.route_arcs(problem)} if warm else None)
     am = build_model(problem, options.objective, restriction)
     if warm is not None:
         add_hint(am, warm)

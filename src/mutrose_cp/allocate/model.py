@@ -59,6 +59,8 @@ class AllocationModel:
     end: dict[str, cp_model.IntVar] = field(default_factory=dict)
     assign: dict[tuple[str, str], cp_model.IntVar] = field(default_factory=dict)
     arcs: dict[str, list[Arc]] = field(default_factory=dict)  # robot -> its route's arcs
+    idle: dict[str, cp_model.IntVar] = field(default_factory=dict)  # robot -> its route is empty
+    last: dict[tuple[str, str], cp_model.IntVar] = field(default_factory=dict)  # (job, robot): the route ends there
     travel: dict[str, cp_model.LinearExprT] = field(default_factory=dict)  # robot -> its travel time
     makespan: cp_model.IntVar | None = None
 
@@ -153,7 +155,7 @@ def _route(am: AllocationModel, robot: Robot, located: list[Job], ruled_out: set
     does not execute loops on itself, and so does the start when the robot goes nowhere."""
     m, problem = am.model, am.problem
     node = {j.id: i + 1 for i, j in enumerate(located)}
-    idle = m.new_bool_var(f"idle[{robot.name}]")
+    idle = am.idle[robot.name] = m.new_bool_var(f"idle[{robot.name}]")
     circuit: list[tuple[int, int, cp_model.LiteralT]] = [(0, 0, idle)]
     arcs: list[Arc] = []
     presence = []
@@ -162,7 +164,8 @@ def _route(am: AllocationModel, robot: Robot, located: list[Job], ruled_out: set
         presence.append(a)
         m.add_implication(a, idle.Not())
         circuit.append((node[job.id], node[job.id], a.Not()))
-        circuit.append((node[job.id], 0, m.new_bool_var(f"last[{job.id},{robot.name}]")))
+        last = am.last[(job.id, robot.name)] = m.new_bool_var(f"last[{job.id},{robot.name}]")
+        circuit.append((node[job.id], 0, last))
         candidates = [(START, robot.start)] + [(i.id, i.location) for i in located if i.id != job.id]
         for source, place in candidates:
             if (source, job.id) in ruled_out or not (source == START or am.restriction.allows(source, job.id)):

@@ -23,6 +23,9 @@ from .model import AllocationModel
 from .problem import NoAllocationError, impossibilities
 
 
+LARGE_MODEL = 20_000  # variables
+
+
 @dataclass(frozen=True)
 class Progress:
     """The state of the search when the incumbent or the bound improves."""
@@ -88,6 +91,10 @@ def search(am: AllocationModel, limits: SearchLimits,
     parameters.max_time_in_seconds = limits.time_limit
     parameters.num_workers = limits.workers
     parameters.random_seed = limits.seed
+    if len(am.model.proto.variables) > LARGE_MODEL:
+        # probing and symmetry detection take most of a minute on large routes, before any search
+        parameters.cp_model_probing_level = 0
+        parameters.symmetry_level = 0
     started = time.monotonic()
     watcher = _Watcher(progress or (lambda _: None), started)
     try:

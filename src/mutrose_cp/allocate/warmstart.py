@@ -32,14 +32,14 @@ class WarmStart:
     chosen: list[str]
     teams: dict[str, tuple[str, ...]]
     start: dict[str, int]
+    decomposition_values: list[int]  # every variable of the decomposition model, by proto index
 
-    def route_arcs(self, problem: AllocationProblem) -> set[tuple[str, str]]:
-        """The arcs of every robot's route (from ``START`` for its first located job)."""
-        arcs: set[tuple[str, str]] = set()
-        for robot in problem.fleet.robots:
-            route = [j for j in sorted((j for j in self.chosen if robot.name in self.teams[j]),
-                                       key=lambda j: (self.start[j], j)) if problem.jobs[j].location is not None]
-            arcs |= set(zip([START] + route, route))
+    def route_arcs(self, problem: AllocationProblem) -> set[tuple[str, str, str]]:
+        """``(robot, source, target)`` for the arcs of every robot's route (from ``START`` for
+        its first located job)."""
+        arcs: set[tuple[str, str, str]] = set()
+        for robot, route in _routes(problem, self).items():
+            arcs |= {(robot, a, b) for a, b in zip([START] + route, route)}
         return arcs
 
 
@@ -49,7 +49,25 @@ def warm_start(problem: AllocationProblem) -> WarmStart | None:
     if chosen is None:
         return None
     plan = greedy_plan(problem, chosen)
-    return None if plan is None else WarmStart(chosen, *plan)
+    values = _decomposition_values(problem, set(chosen))
+    return None if plan is None or values is None else WarmStart(chosen, *plan, values)
+
+
+def _decomposition_values(problem: AllocationProblem, chosen: set[str]) -> list[int] | None:
+    """The values of all the decomposition model's variables for ``chosen`` (its auxiliary
+    variables included), so that the hint is complete: found by CP-SAT on a copy of the model
+    (before the allocation is added to it) with the decompositions fixed."""
+    from ..solve.native import cmh
+    from ..solve.run import FEASIBLE, INFEASIBLE, OPTIMAL, run_solver
+
+    proto = cmh.CpModelProto()
+    proto.copy_from(problem.dm.model.proto)
+    for d, literal in problem.dm.decomposition.items():
+        index = literal.index
+        c = proto.constraints.add()
+        c.bool_or.literals.append(index if (d in chosen) else -index - 1)
+    response = run_solver(proto, accept=(OPTIMAL, FEASIBLE, INFEASIBLE), what="the warm start")
+    return None if response.status == INFEASIBLE else list(response.solution)
 
 
 def add_hint(am: AllocationModel, warm: WarmStart) -> None:
@@ -130,26 +148,52 @@ def _partners(problem: AllocationProblem, chosen: set[str]) -> dict[str, list[st
 
 
 def _hint(am: AllocationModel, warm: WarmStart) -> None:
-    m, dm, problem = am.model, am.problem.dm, am.problem
-    chosen, teams, start = warm.chosen, warm.teams, warm.start
-    picked = set(chosen)
-    for d, literal in dm.decomposition.items():
-        if d in problem.jobs:
-            _hint_literal(m, literal, d in picked)
+    """Every variable of the model, from the warm start (a complete hint is one CP-SAT can take
+    as its first solution without a search)."""
+    m, problem = am.model, am.problem
+    teams = warm.teams
+    picked = set(warm.chosen)
+    for index, value in enumerate(warm.decomposition_values):
+        m.proto.solution_hint.vars.append(index)
+        m.proto.solution_hint.values.append(value)
     for (j, r), a in am.assign.items():
         m.add_hint(a, j in picked and r in teams[j])
-    for j in chosen:
+    start = _all_starts(problem, warm)
+    for j in problem.jobs:
         m.add_hint(am.start[j], start[j])
-        m.add_hint(am.end[j], start[j] + problem.jobs[j].duration)
+        m.add_hint(am.end[j], start[j] + (problem.jobs[j].duration if j in picked else 0))
     used = warm.route_arcs(problem)
-    for arcs in am.arcs.values():
+    for robot, arcs in am.arcs.items():
         for arc in arcs:
-            m.add_hint(arc.literal, (arc.source, arc.target) in used)
+            m.add_hint(arc.literal, (robot, arc.source, arc.target) in used)
+    routes = _routes(problem, warm)
+    for robot, idle in am.idle.items():
+        m.add_hint(idle, not routes[robot])
+    for (j, robot), literal in am.last.items():
+        m.add_hint(literal, bool(routes[robot]) and routes[robot][-1] == j)
+    if am.makespan is not None:
+        m.add_hint(am.makespan, max((start[j] + problem.jobs[j].duration for j in picked), default=0))
 
 
-def _hint_literal(m: object, literal: object, value: bool) -> None:
-    index = literal.index  # type: ignore[attr-defined]
-    variable = m.get_bool_var_from_proto_index(index if index >= 0 else -index - 1)  # type: ignore[attr-defined]
-    domain = list(m.proto.variables[variable.index].domain)  # type: ignore[attr-defined]
-    if domain[0] != domain[-1]:  # constants need no hint
-        m.add_hint(variable, value if index >= 0 else not value)  # type: ignore[attr-defined]
+def _routes(problem: AllocationProblem, warm: WarmStart) -> dict[str, list[str]]:
+    return {r.name: [j for j in sorted((j for j in warm.chosen if r.name in warm.teams[j]),
+                                       key=lambda j: (warm.start[j], j)) if problem.jobs[j].location is not None]
+            for r in problem.fleet.robots}
+
+
+def _all_starts(problem: AllocationProblem, warm: WarmStart) -> dict[str, int]:
+    """The warm start's times, and for the jobs not chosen the end of their latest predecessor
+    (they take no time and pass the precedences on)."""
+    before: dict[str, list[str]] = {}
+    for first, second in problem.precedences:
+        before.setdefault(second, []).append(first)
+    order = TopologicalSorter({j: before.get(j, []) for j in problem.jobs}).static_order()
+    start: dict[str, int] = {}
+    end: dict[str, int] = {}
+    for j in order:
+        if j in warm.start:
+            start[j] = warm.start[j]
+            end[j] = start[j] + problem.jobs[j].duration
+        else:
+            start[j] = end[j] = max((end[i] for i in before.get(j, [])), default=0)
+    return start
