@@ -279,3 +279,20 @@ def test_the_example_script_runs(capsys):
         sys.argv = argv
     out = capsys.readouterr().out
     assert out.startswith("OPTIMAL: makespan 136, travel 214") and "picker:" in out
+
+
+@pytest.mark.parametrize("phase", ["allocating", "writing the output"])
+def test_an_interrupt_writes_nothing(tmp_path, phase):
+    import os
+    import subprocess
+    import sys
+
+    from mutrose_cp.interrupt import FAULT_ENV
+
+    out, schedule, chart = tmp_path / "out.json", tmp_path / "schedule.json", tmp_path / "chart.svg"
+    run = subprocess.run([sys.executable, "-m", "mutrose_cp", "allocate", str(DELIVERY), "--fleet", str(FLEET),
+                          "-o", str(out), "--schedule", str(schedule), "--gantt", str(chart)],
+                         env={**os.environ, FAULT_ENV: f"{phase}:INT"}, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 130, run.stderr
+    assert f"interrupted while {phase}" in run.stderr and "Traceback" not in run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

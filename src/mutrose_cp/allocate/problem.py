@@ -80,15 +80,15 @@ def possible_decompositions(dm: DecompositionModel) -> set[str]:
     off every robot's route, which grows with the square of its jobs."""
     from ..errors import NoDecompositionError
     from ..solve.native import cmh
+    from ..solve.run import run_solver
 
     parameters = cmh.SatParameters()
     parameters.stop_after_presolve = True
     parameters.fill_tightened_domains_in_response = True
     parameters.keep_all_feasible_solutions_in_presolve = True  # no solution removed "without loss"
     parameters.num_workers = 1
-    solver = cmh.SolveWrapper()
-    solver.set_parameters(parameters)
-    response = solver.solve(dm.model.proto)
+    response = run_solver(dm.model.proto, accept=list(cmh.CpSolverStatus.__members__.values()), parameters=parameters,
+                          what="the presolve")
     if response.status == cmh.CpSolverStatus.INFEASIBLE:
         raise NoDecompositionError("no valid mission decomposition exists")
     domains = response.tightened_variables
