@@ -62,7 +62,7 @@ def compact(problem: AllocationProblem, jobs: Sequence[str], teams: Mapping[str,
     place = {r.name: r.start for r in problem.fleet.robots}
     for j in order:
         job = problem.jobs[j]
-        ready = max((early_end[i] for i in predecessors[j]), default=0)
+        ready = max((early_end.get(i, end[i]) for i in predecessors[j]), default=0)
         for r in teams[j]:
             ready = max(ready, free[r] + problem.time(robots[r], place[r], job.location))
         early_start[j], early_end[j] = ready, ready + job.duration
