@@ -102,7 +102,7 @@ def _schedule(am: AllocationModel, values: list[int]) -> Schedule:
 
     problem, dm = am.problem, am.problem.dm
     jobs = [j for j in problem.jobs if true(dm.decomposition[j])]
-    teams = {j: tuple(r for r in problem.jobs[j].candidates if true(am.assign[(j, r)])) for j in jobs}
+    teams = {j: tuple(r for r in am.restriction.robots_of(problem, j) if true(am.assign[(j, r)])) for j in jobs}
     start = {j: values[am.start[j].index] for j in jobs}
     end = {j: values[am.end[j].index] for j in jobs}
     return compact(problem, jobs, teams, start, end)
