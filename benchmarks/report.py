@@ -235,6 +235,9 @@ def main(argv: list[str]) -> int:
     images = plots(rows)
     if images:
         out += ["## Plots", ""] + [f"![{i}](images/{i})" for i in images] + [""]
+    if (RESULTS / "allocation.json").exists():  # recorded by benchmarks/allocation.py, its own report
+        out += ["## Allocation", "", "`mutrose-cp allocate` (decomposition, robots and schedule with travel) on "
+                "deliveries on a grid, 5 to 50 robots: [its own report](benchmarks-allocation.md).", ""]
     out += [PROFILE]
     DOC.write_text("\n".join(out), encoding="utf-8")
     print(f"wrote {DOC}")

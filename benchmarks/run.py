@@ -16,6 +16,7 @@ import json
 import os
 import platform
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -256,6 +257,10 @@ def main(argv: list[str] | None = None) -> int:
     result = {"name": name, "machine": machine(), "repeats": repeats, "timeout_s": timeout,
               "date": time.strftime("%Y-%m-%d", time.gmtime(started)),
               "elapsed_s": round(time.time() - started, 1), "rows": rows}
+    if args.quick:  # the allocation benchmark's tiny instance (its full ladder: benchmarks/allocation.py)
+        smoke = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "allocation.py"), "--quick"], cwd=ROOT)
+        if smoke.returncode != 0:
+            rows.append({"family": "allocation", "n": 4, "algorithm": "allocate", "status": "failed"})
     path = RESULTS / f"{name}.json"
     path.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
     failed = [r for r in rows if r["status"] not in ("ok", "timeout")]

@@ -22,6 +22,11 @@ def test_api_guide_examples_run(monkeypatch, capsys):
     printed = capsys.readouterr().out.splitlines()
     # the solve printed the chosen decompositions and OR choices the text describes
     assert printed[0].startswith("['AT") and "'G7_2': 'G11'" in printed[1]
+    # Mission.allocate: proven optimal, three robots' routes, the teams
+    assert printed[2].startswith("OPTIMAL 136 136.0 ")
+    assert [line.split(" ", 1)[0] for line in printed[3:6]] == ["picker", "talker", "allrounder"]
+    assert printed[6].startswith("{'AT")
+    del printed[2:7]
     # Mission.decompose: the first two of the eight, the least cost, a sample of three
     assert printed[2].startswith("8 [['AT1_1|1'") and printed[2].count("[") == 3
     mission, best, costs = namespace["mission"], namespace["best"], namespace["costs"]

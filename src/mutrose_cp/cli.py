@@ -15,7 +15,7 @@ import sys
 import time
 from collections import Counter
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 from . import __version__
 from .errors import MissionError, Problem
@@ -26,6 +26,9 @@ from .mission import Mission, find_mission_files
 from .process import command_settings, exit_process, usable_stderr
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
+
+if TYPE_CHECKING:
+    from .allocate.fleet import Fleet
 
 
 def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
@@ -101,6 +104,10 @@ def cmd_check(args: argparse.Namespace) -> int:
     exp = mission.expansion
     _ = mission.task_graph
     _ = mission.constraints
+    if args.fleet:
+        from .allocate.fleet import Fleet
+
+        _check_fleet(mission, Fleet.read(args.fleet))
     if not args.strict:
         _warn(args, mission)
     _check_domain(args, mission)
@@ -125,6 +132,99 @@ def _check_domain(args: argparse.Namespace, mission: Mission) -> None:
     elif not args.quiet:
         for problem in found:
             print(f"warning: {problem}", file=sys.stderr)
+
+
+def _check_fleet(mission: Mission, fleet: Fleet) -> None:
+    """The fleet's names against the mission, and travel times to every place the mission's
+    tasks are at (``check --fleet``, and before ``allocate`` solves)."""
+    from .allocate.problem import fleet_problems, task_places
+    from .allocate.travel import build_travel
+
+    problems = fleet_problems(mission, fleet)
+    if problems:
+        raise MissionError(problems)
+    build_travel(mission, fleet, task_places(mission, fleet))
+
+
+def cmd_allocate(args: argparse.Namespace) -> int:
+    """Choose the decomposition, the robots and the schedule together; write the schedule, the
+    chosen decomposition (and a Gantt chart)."""
+    from .allocate import AllocationOptions, Fleet, Objective
+    from .allocate.output import objective_section, summary_line, write_decomposition, write_schedule
+
+    hddl, gm, cfg, folder = _inputs(args)
+    start = time.perf_counter()
+    objective = Objective.parse(args.objective)
+    if args.gantt:
+        from .allocate.gantt import gantt_format, matplotlib_ready
+
+        gantt_format(args.gantt)
+        matplotlib_ready()
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    _warn(args, mission)
+    fleet = Fleet.read(args.fleet)
+    _check_fleet(mission, fleet)
+    out_path = Path(args.output) if args.output else _default_output(mission, folder)
+    schedule_path = Path(args.schedule) if args.schedule else out_path.with_name("schedule.json")
+    for path in (out_path, schedule_path, *([Path(args.gantt)] if args.gantt else [])):
+        _refuse_inputs_as_output(path, mission, (hddl, gm, cfg, Path(args.fleet)))
+    options = AllocationOptions(objective, args.time_limit, args.workers, args.seed)
+    progress = _AllocationProgress(not args.quiet, objective.name)
+    try:
+        with phase("allocating"):
+            allocation = mission.allocate(fleet, options, progress)
+    finally:
+        progress.close()
+    with phase("writing the output"):
+        write_schedule(allocation, schedule_path)
+        write_decomposition(allocation, out_path, args.format or mission.config.output.file_type)
+        if args.gantt:
+            from .allocate.gantt import write_gantt
+
+            write_gantt(allocation, args.gantt)
+    elapsed = time.perf_counter() - start
+    schedule = allocation.schedule
+    data = {"command": "allocate", "objective": objective_section(allocation), "makespan": schedule.makespan,
+            "travel": schedule.travel, "tasks": len(schedule.jobs),
+            "robots_used": sum(1 for v in schedule.routes.values() if v), "schedule": str(schedule_path),
+            "output": str(out_path), "gantt": args.gantt, "seconds": round(elapsed, 3)}
+    _summary(args, data, f"{summary_line(allocation)} -> {schedule_path}, {out_path}"
+             + (f", {args.gantt}" if args.gantt else "") + f" ({elapsed:.2f} s)", mission)
+    return 0
+
+
+def _default_output(mission: Mission, folder: Path | None) -> Path:
+    """Where ``decompose`` would write: the configuration's output path (from the mission
+    folder when one was given)."""
+    if folder is not None and not Path(mission.config.output.file_path).is_absolute():
+        return folder / mission.config.output.file_path
+    return mission.output_path()
+
+
+class _AllocationProgress:
+    """The anytime progress line of ``allocate``: the incumbent, the bound and the gap."""
+
+    def __init__(self, enabled: bool, kind: str) -> None:
+        self.line = _Progress(enabled)
+        self.kind = kind
+
+    def __call__(self, progress: object) -> None:
+        from .allocate.search import Progress
+
+        assert isinstance(progress, Progress)
+        now = time.monotonic()
+        if not self.line.enabled or now - self.line.last < 0.1:
+            return
+        self.line.last = now
+        best = "none yet" if progress.objective is None else f"{progress.objective:g}"
+        gap = "" if progress.gap is None else f", gap {100 * progress.gap:.1f}%"
+        sys.stderr.write(f"\r\033[Kallocating: {self.kind} {best}, bound {progress.bound:g}{gap} "
+                         f"({progress.seconds:.1f} s)")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        if self.line.enabled:
+            sys.stderr.write("\r\033[K")
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -396,6 +496,10 @@ def _seconds(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
+
+
+    if not 0 < value <= 10**7:
+        raise argparse.ArgumentTypeError(f"{text} is out of range: give a number of seconds above 0")
     return value
 
 
@@ -424,6 +528,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
     common(p)
     p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
+
+
+    p.add_argument("--fleet", metavar="FLEET.json", help="also check a fleet file against the mission")
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("decompose", help="decompose the mission and write the output file")
@@ -452,6 +559,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--ihtn-max", type=_count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
                    help="--ihtn: refuse (exit 2) an export of more than N files (default 10000)")
     p.set_defaults(func=cmd_decompose)
+
+    p = sub.add_parser("allocate", help="choose the decomposition, the robots and the schedule together")
+    common(p)
+    p.add_argument("--fleet", required=True, metavar="FLEET.json", help="the robots, durations and travel (JSON)")
+    p.add_argument("-o", "--output", help="the chosen decomposition, in the output format (default: the "
+                                          "configuration's output.file_path)")
+    p.add_argument("--format", choices=("json", "xml"), help="format of -o (default: the configuration's)")
+    p.add_argument("--schedule", metavar="FILE", help="the schedule (default: schedule.json beside -o)")
+    p.add_argument("--gantt", metavar="FILE.png|svg", help="also draw the schedule (needs matplotlib)")
+    p.add_argument("--objective", default="makespan", metavar="makespan|travel|weighted:A,B",
+                   help="minimise the makespan (default), the total travel, or A * makespan + B * travel")
+    p.add_argument("--time-limit", type=_seconds, default=10.0, metavar="S",
+                   help="stop the search after S seconds with the best schedule found (default 10)")
+    p.add_argument("--workers", type=_count_option(1), default=1, metavar="N",
+                   help="CP-SAT search threads (default 1: the same schedule on every finished run)")
+    p.add_argument("--seed", type=_count_option(0), default=0, help="CP-SAT random seed (default 0)")
+    p.set_defaults(func=cmd_allocate)
 
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
     common(p)

@@ -28,6 +28,9 @@ from .taskgraph import build_task_graph
 from .world import build_initial_state
 
 if TYPE_CHECKING:  # the solvers import OR-Tools, which takes a while: loaded when first used
+    from .allocate import AllocationOptions, Fleet
+    from .allocate.allocation import Allocation
+    from .allocate.search import Progress
     from .solve.cpsat import DecompositionSpace
     from .solve.decompose import DecompositionRequest, DecompositionResult
     from .solve.embedding import DecompositionModel
@@ -262,6 +265,14 @@ class Mission:
         from .solve.embedding import DecompositionModel
 
         return DecompositionModel.build(self)
+
+    def allocate(self, fleet: Fleet, options: AllocationOptions | None = None,
+                 progress: Callable[[Progress], None] | None = None) -> Allocation:
+        """A valid mission decomposition, its robots and its schedule chosen together for
+        ``fleet``, with travel (see ``allocate/``); everything ``mutrose-cp allocate`` does."""
+        from .allocate import AllocationOptions, allocate
+
+        return allocate(self, fleet, options if options is not None else AllocationOptions(), progress)
 
     def output_path(self) -> Path:
         return resolve_output_path(self.config.output.file_path, self.config_path)

@@ -12,7 +12,7 @@ search early and report the partial enumeration as a normal status.
 from __future__ import annotations
 
 import threading
-from typing import Iterable
+from typing import Callable, Iterable
 
 from ..errors import MissionError
 from ..interrupt import signals_held
@@ -40,19 +40,31 @@ def _stop(solver: cmh.SolveWrapper, done: threading.Event) -> None:
             done.wait(0.05)
 
 
-def run_solver(model: cmh.CpModelProto, *, accept: Iterable[Status],
-               callback: cmh.SolutionCallback | None = None,
-               enumerate_all: bool = False, what: str = "a component") -> cmh.CpSolverResponse:
-    """Solve ``model`` with one worker; returns the response, whose status is one of ``accept``."""
-    parameters = cmh.SatParameters()
-    parameters.num_workers = 1
+def _parameters(given: cmh.SatParameters | None, enumerate_all: bool) -> cmh.SatParameters:
+    """``given`` (one worker if none), with CP-SAT's own SIGINT handler off."""
+    parameters = given if given is not None else cmh.SatParameters()
+    if given is None:
+        parameters.num_workers = 1
     parameters.catch_sigint_signal = False
     if enumerate_all:
         parameters.enumerate_all_solutions = True
+    return parameters
+
+
+def run_solver(model: cmh.CpModelProto, *, accept: Iterable[Status],
+               callback: cmh.SolutionCallback | None = None,
+               enumerate_all: bool = False, what: str = "a component",
+               parameters: cmh.SatParameters | None = None,
+               bound_callback: Callable[[float], None] | None = None) -> cmh.CpSolverResponse:
+    """Solve ``model`` (with one worker unless ``parameters`` say otherwise); returns the
+    response, whose status is one of ``accept``.  ``bound_callback`` hears of every improvement
+    of the objective's proven bound."""
     solver = cmh.SolveWrapper()
-    solver.set_parameters(parameters)
+    solver.set_parameters(_parameters(parameters, enumerate_all))
     if callback is not None:
         solver.add_solution_callback(callback)
+    if bound_callback is not None:
+        solver.add_best_bound_callback(bound_callback)
     responses: list[cmh.CpSolverResponse] = []
     errors: list[BaseException] = []
     done = threading.Event()

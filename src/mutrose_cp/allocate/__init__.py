@@ -1,0 +1,36 @@
+"""Allocation: a mission's decomposition, robots and schedule chosen together, with travel.
+
+``mutrose-cp allocate`` and :meth:`mutrose_cp.mission.Mission.allocate`.  One CP-SAT model,
+built on the decomposition model of the embedding API, chooses which valid mission
+decomposition is executed, which robots of the fleet execute each of its tasks, in which order
+each robot visits the tasks' places, and when everything starts; the LP relaxation, solved by
+Clarabel, bounds the objective independently.  The stages are listed in :mod:`.allocation`;
+the fleet file is read by :mod:`.fleet` (``docs/formats/fleet.md``), the schedule file written
+by :mod:`.output` (``docs/formats/schedule.md``).
+
+The solving stages import OR-Tools' full CP-SAT API (with numpy): :func:`allocate` loads them
+when it runs, so reading and checking a fleet stays light.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Callable
+
+from .fleet import Durations, Fleet, Robot, TravelSpec
+from .options import AllocationOptions, Objective
+from .problem import NoAllocationError
+
+if TYPE_CHECKING:
+    from ..mission import Mission
+    from .allocation import Allocation
+    from .search import Progress
+
+__all__ = ["AllocationOptions", "Durations", "Fleet", "NoAllocationError", "Objective", "Robot", "TravelSpec",
+           "allocate"]
+
+
+def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = AllocationOptions(),
+             progress: Callable[[Progress], None] | None = None) -> Allocation:
+    """Allocate ``mission`` to ``fleet`` (see :func:`.allocation.allocate`)."""
+    from .allocation import allocate as run
+
+    return run(mission, fleet, options, progress)

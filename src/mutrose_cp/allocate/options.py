@@ -1,0 +1,58 @@
+"""What an allocation minimises and how long it searches: the options of ``mutrose-cp
+allocate`` and of :meth:`mutrose_cp.mission.Mission.allocate`."""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from ..errors import MissionError
+
+
+@dataclass(frozen=True)
+class Objective:
+    """``makespan_weight * makespan + travel_weight * total travel``, minimised."""
+
+    makespan_weight: int = 1
+    travel_weight: int = 0
+
+    @classmethod
+    def parse(cls, text: str) -> "Objective":
+        """``makespan``, ``travel`` or ``weighted:A,B`` (A times the makespan plus B times the
+        travel; whole numbers, not both 0)."""
+        if text == "makespan":
+            return cls(1, 0)
+        if text == "travel":
+            return cls(0, 1)
+        match = re.fullmatch(r"weighted:(\d+),(\d+)", text.strip())
+        if match is None or match.group(1) == match.group(2) == "0" or not all(
+                int(g) <= 10**6 for g in match.groups()):
+            raise MissionError(f"unknown objective {text!r}: expected makespan, travel or weighted:A,B (whole "
+                               "weights from 0 to 1000000, not both 0), e.g. weighted:10,1", "--objective")
+        return cls(int(match.group(1)), int(match.group(2)))
+
+    @property
+    def name(self) -> str:
+        if self.travel_weight == 0:
+            return "makespan"
+        if self.makespan_weight == 0:
+            return "travel"
+        return f"weighted:{self.makespan_weight},{self.travel_weight}"
+
+    def value(self, makespan: float, travel: float) -> float:
+        return self.makespan_weight * makespan + self.travel_weight * travel
+
+
+@dataclass(frozen=True)
+class AllocationOptions:
+    """What to minimise and how long to search.
+
+    CP-SAT runs with ``seed`` and ``workers`` threads (its portfolio, large-neighbourhood
+    search included, from 2 on).  A search that ends before ``time_limit`` with one worker
+    always gives the same schedule; a search cut by the time limit depends on the machine."""
+
+    objective: Objective = Objective()
+    time_limit: float = 10.0
+    workers: int = 1
+    seed: int = 0
+    lp_bound: bool = True  # also compute the LP bound with Clarabel
+    warm_start: bool = True  # give CP-SAT a first schedule (decomposition-first) as a hint

@@ -1,0 +1,199 @@
+"""The allocation problem: what the mission asks of the fleet, before any solver is involved.
+
+From the decomposition model (``solve/embedding.py``) and the fleet, each decomposition that can
+be chosen becomes a :class:`Job`: its duration (the sum of its actions'), its place (the task's
+``Location``), how many robots it needs and which robots are able to execute it.  The mission's
+constraints become precedences (SEQ, and FB: a fallback is scheduled after its primary, the
+worst case) and shared-robot rules (execution constraints).
+
+:func:`impossibilities` names what the fleet lacks for each job it cannot staff, which is how a
+mission without any feasible allocation is explained; :func:`fleet_problems` checks the names
+in a fleet file against the mission (``check --fleet``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from ..errors import MissionError, Problem, closest
+from ..model import RobotNumber
+from .fleet import Fleet, Robot
+from .travel import TravelTimes, build_travel, world_places
+
+if TYPE_CHECKING:
+    from ..mission import Mission
+    from ..solve.embedding import DecompositionModel
+
+
+class NoAllocationError(MissionError):
+    """The mission has valid decompositions, but the fleet cannot execute any of them (exit 3)."""
+
+    exit_code = 3
+
+
+@dataclass(frozen=True)
+class Job:
+    """A decomposition the allocation may choose, as the fleet sees it."""
+
+    id: str  # the decomposition id, "AT1_1|1"
+    task: str  # the task instance, "AT1_1"
+    name: str  # the HDDL task, "FetchItem"
+    actions: tuple[str, ...]
+    duration: int
+    location: str | None  # None: done wherever the robot is
+    robots: RobotNumber
+    capabilities: frozenset[str]
+    candidates: tuple[str, ...]  # robots having every capability, in fleet order
+
+
+@dataclass(frozen=True)
+class AllocationProblem:
+    """The jobs, their precedences and shared-robot rules, the fleet and its travel times."""
+
+    dm: DecompositionModel
+    fleet: Fleet
+    jobs: dict[str, Job]  # in Task Graph order
+    travel: TravelTimes
+    precedences: tuple[tuple[str, str], ...]  # (first, second): second starts after first ends
+    same_robots: tuple[tuple[str, str], ...]  # EC pairs executed by the same robot or team
+
+    def time(self, robot: Robot, a: str | None, b: str | None) -> int:
+        return self.travel.time(robot, a, b)
+
+
+def place_of(location: object) -> str | None:
+    """The place of a task: its ``Location`` when that is one world entity; none (done where the
+    robot is) when the task has no location or a collection of them."""
+    return location if isinstance(location, str) and location else None
+
+
+def task_places(mission: Mission, fleet: Fleet) -> set[str]:
+    """Every place a task of the mission is at, and the robots' starts."""
+    tasks = {place_of(v.decomposition.instance.location)
+             for v in mission.task_graph.decompositions() if v.decomposition is not None}
+    return {p for p in tasks if p} | {r.start for r in fleet.robots if r.start}
+
+
+def possible_decompositions(dm: DecompositionModel) -> set[str]:
+    """The decompositions CP-SAT's presolve does not rule out on the decomposition model alone
+    (a method whose precondition the world falsifies, say).  Leaving the others out keeps them
+    off every robot's route, which grows with the square of its jobs."""
+    from ..errors import NoDecompositionError
+    from ..solve.native import cmh
+    from ..solve.run import run_solver
+
+    parameters = cmh.SatParameters()
+    parameters.stop_after_presolve = True
+    parameters.fill_tightened_domains_in_response = True
+    parameters.keep_all_feasible_solutions_in_presolve = True  # no solution removed "without loss"
+    parameters.num_workers = 1
+    response = run_solver(dm.model.proto, accept=list(cmh.CpSolverStatus.__members__.values()), parameters=parameters,
+                          what="the presolve")
+    if response.status == cmh.CpSolverStatus.INFEASIBLE:
+        raise NoDecompositionError("no valid mission decomposition exists")
+    domains = response.tightened_variables
+    if len(domains) != len(dm.model.proto.variables):
+        return set(dm.decomposition)
+
+    def can_be_true(literal: object) -> bool:
+        index = literal.index  # type: ignore[attr-defined]
+        domain = list(domains[index if index >= 0 else -index - 1].domain)
+        return domain != ([0, 0] if index >= 0 else [1, 1])
+
+    return {d for d, literal in dm.decomposition.items() if can_be_true(literal)}
+
+
+def build_problem(dm: DecompositionModel, fleet: Fleet) -> AllocationProblem:
+    """The jobs of every decomposition that can be chosen, with their candidate robots and the
+    travel times between their places and the robots' starts."""
+    durations = fleet.durations
+    instances = {v.decomposition.id: v.decomposition.instance
+                 for v in dm.mission.task_graph.decompositions() if v.decomposition is not None}
+    jobs: dict[str, Job] = {}
+    possible = possible_decompositions(dm)
+    for d, info in dm.decompositions_info.items():
+        if d not in possible:
+            continue  # never part of a valid mission decomposition
+        duration = sum(durations.of_action(a, caps) for a, caps in zip(info.actions, info.action_capabilities))
+        candidates = tuple(r.name for r in fleet.robots if info.capabilities <= r.capabilities)
+        jobs[d] = Job(d, info.task, info.task_name, info.actions, duration, place_of(instances[d].location),
+                      info.robot_number, info.capabilities, candidates)
+    places = {j.location for j in jobs.values() if j.location} | {r.start for r in fleet.robots if r.start}
+    travel = build_travel(dm.mission, fleet, places)
+    precedences = tuple((c.first, c.second) for c in dm.constraints
+                        if c.kind in ("SEQ", "FB") and c.first in jobs and c.second in jobs)
+    same = tuple((c.first, c.second) for c in dm.constraints
+                 if c.kind == "EC" and (not c.group or not c.divisible) and c.first in jobs and c.second in jobs)
+    return AllocationProblem(dm, fleet, jobs, travel, precedences, same)
+
+
+# ----------------------------------------------------------------------------------------------
+# What the fleet lacks
+
+
+def impossibilities(problem: AllocationProblem) -> list[str]:
+    """Why some jobs (or pairs of jobs that must share robots) cannot be staffed by the fleet:
+    a capability no robot has, or fewer able robots than the task's robot number."""
+    reasons = []
+    for job in problem.jobs.values():
+        reason = _short_of(problem.fleet, job.capabilities, job.robots.min, len(job.candidates))
+        if reason:
+            reasons.append(f"{job.id} ({job.name}) {reason}")
+    for first, second in problem.same_robots:
+        a, b = problem.jobs[first], problem.jobs[second]
+        union = a.capabilities | b.capabilities
+        if union in (a.capabilities, b.capabilities):
+            continue  # no more than each needs alone
+        able = sum(1 for r in problem.fleet.robots if union <= r.capabilities)
+        reason = _short_of(problem.fleet, union, max(a.robots.min, b.robots.min), able)
+        if reason:
+            reasons.append(f"{first} ({a.name}) and {second} ({b.name}), done by the same robots, {reason}")
+    return reasons
+
+
+def _short_of(fleet: Fleet, capabilities: frozenset[str], needed: int, able: int) -> str:
+    if able >= needed:
+        return ""
+    missing = sorted(c for c in capabilities if not any(c in r.capabilities for r in fleet.robots))
+    if missing:
+        return f"needs {', '.join(missing)}: no robot of the fleet has {'it' if len(missing) == 1 else 'them'}"
+    needs = ", ".join(sorted(capabilities)) or "no capability"
+    return (f"needs {needed} robot{'s' if needed != 1 else ''} with {needs}: the fleet has {able}")
+
+
+# ----------------------------------------------------------------------------------------------
+# The fleet file against the mission
+
+
+def fleet_problems(mission: Mission, fleet: Fleet) -> list[Problem]:
+    """Names in the fleet that the mission does not know (a typo would silently change the
+    durations or make a robot useless), start places without a place, and task places without
+    travel times."""
+    domain = mission.domain
+    capabilities = set(domain.capabilities) | {c for a in domain.actions for c in a.capabilities}
+    actions = {a.name for a in domain.actions}
+    problems = []
+    for i, robot in enumerate(fleet.robots):
+        for c in sorted(robot.capabilities - capabilities):
+            problems.append(_unknown(fleet, ("robots", i, "capabilities"), "capability", c, capabilities))
+    for name in fleet.durations.actions:
+        if name not in actions:
+            problems.append(_unknown(fleet, ("durations", "actions", name), "action", name, actions, key=True))
+    for name in fleet.durations.capabilities:
+        if name not in capabilities:
+            problems.append(_unknown(fleet, ("durations", "capabilities", name), "capability", name, capabilities,
+                                     key=True))
+    places, world_problems = world_places(mission)
+    known = set(places) | set(fleet.travel.coordinates) | {p for pair in fleet.travel.times for p in pair}
+    for i, robot in enumerate(fleet.robots):
+        if robot.start is not None and robot.start not in known:
+            problems.append(_unknown(fleet, ("robots", i, "start"), "place", robot.start, known))
+    return problems + world_problems
+
+
+def _unknown(fleet: Fleet, path: tuple[str | int, ...], what: str, name: str, known: set[str], *,
+             key: bool = False) -> Problem:
+    near = closest(name, known)
+    plural = {"capability": "capabilities", "place": "places", "action": "actions"}[what]
+    hint = f"Did you mean {near!r}?" if near else f"The mission's {plural}: {', '.join(sorted(known)) or 'none'}."
+    return Problem(fleet.where(path, key=key), f"unknown {what} {name!r}", hint)

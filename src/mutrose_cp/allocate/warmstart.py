@@ -1,0 +1,199 @@
+"""A first schedule, handed to CP-SAT as a hint: decomposition first, then a greedy allocation.
+
+1. The decomposition: the least total work, found exactly by the decomposer's optimisation
+   (``decompose --optimize`` with the fleet's action durations as costs).
+2. The allocation: its jobs in an order that respects the precedences, each given the robots
+   (among those able) that can be there first, where it must share robots with a job already
+   placed, those robots; it starts when its predecessors have ended and its robots arrived.
+
+The hint only guides the search: CP-SAT checks it like any other assignment, and a mission
+where the greedy step gets stuck (the first decomposition needs robots that the greedy choice
+used up) is simply searched without a hint.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from graphlib import CycleError, TopologicalSorter
+
+from ..errors import MissionError
+from ..solve.decompose import DecompositionRequest
+from ..solve.optimize import CostModel
+from .model import START, AllocationModel
+from .problem import AllocationProblem
+from .schedule import chosen_predecessors
+
+Plan = tuple[dict[str, tuple[str, ...]], dict[str, int]]  # teams and start times of the chosen jobs
+
+
+@dataclass(frozen=True)
+class WarmStart:
+    """The greedy schedule: the chosen jobs, their teams and start times."""
+
+    chosen: list[str]
+    teams: dict[str, tuple[str, ...]]
+    start: dict[str, int]
+    decomposition_values: list[int]  # every variable of the decomposition model, by proto index
+
+    def route_arcs(self, problem: AllocationProblem) -> set[tuple[str, str, str]]:
+        """``(robot, source, target)`` for the arcs of every robot's route (from ``START`` for
+        its first located job)."""
+        arcs: set[tuple[str, str, str]] = set()
+        for robot, route in _routes(problem, self).items():
+            arcs |= {(robot, a, b) for a, b in zip([START] + route, route)}
+        return arcs
+
+
+def warm_start(problem: AllocationProblem) -> WarmStart | None:
+    """The greedy schedule of the least-work decomposition; None when there is none."""
+    chosen = least_work_decomposition(problem)
+    if chosen is None:
+        return None
+    plan = greedy_plan(problem, chosen)
+    values = _decomposition_values(problem, set(chosen))
+    return None if plan is None or values is None else WarmStart(chosen, *plan, values)
+
+
+def _decomposition_values(problem: AllocationProblem, chosen: set[str]) -> list[int] | None:
+    """The values of all the decomposition model's variables for ``chosen`` (its auxiliary
+    variables included), so that the hint is complete: found by CP-SAT on a copy of the model
+    (before the allocation is added to it) with the decompositions fixed."""
+    from ..solve.native import cmh
+    from ..solve.run import FEASIBLE, INFEASIBLE, OPTIMAL, run_solver
+
+    proto = cmh.CpModelProto()
+    proto.copy_from(problem.dm.model.proto)
+    for d, literal in problem.dm.decomposition.items():
+        index = literal.index
+        c = proto.constraints.add()
+        c.bool_or.literals.append(index if (d in chosen) else -index - 1)
+    response = run_solver(proto, accept=(OPTIMAL, FEASIBLE, INFEASIBLE), what="the warm start")
+    return None if response.status == INFEASIBLE else list(response.solution)
+
+
+def add_hint(am: AllocationModel, warm: WarmStart) -> None:
+    """Hint ``warm`` to CP-SAT."""
+    _hint(am, warm)
+
+
+def least_work_decomposition(problem: AllocationProblem) -> list[str] | None:
+    """The valid mission decomposition with the least total work (ids, in mission order)."""
+    mission = problem.dm.mission
+    durations = problem.fleet.durations
+    costs = CostModel(actions={a.name: durations.of_action(a.name, a.capabilities) for a in mission.domain.actions})
+    try:
+        result = mission.decompose(DecompositionRequest(optimize=True, costs=costs))
+    except MissionError:
+        return None
+    if result.optimum is None:
+        return None
+    tg = mission.task_graph
+    ids = [tg.vertices[v].content for v in result.optimum[0]]
+    return ids if all(d in problem.jobs for d in ids) else None
+
+
+def greedy_plan(problem: AllocationProblem, chosen: list[str]) -> Plan | None:
+    """Teams and start times for ``chosen`` (see the module docstring), None when stuck."""
+    order = _precedence_order(problem, chosen)
+    if order is None:
+        return None
+    robots = {r.name: r for r in problem.fleet.robots}
+    free = dict.fromkeys(robots, 0)
+    place = {r.name: r.start for r in problem.fleet.robots}
+    partners = _partners(problem, set(chosen))
+    before = chosen_predecessors(problem, set(chosen))
+    teams: dict[str, tuple[str, ...]] = {}
+    start: dict[str, int] = {}
+    for j in order:
+        job = problem.jobs[j]
+
+        def arrival(r: str) -> int:
+            return free[r] + problem.time(robots[r], place[r], job.location)
+
+        placed = [teams[p] for p in partners.get(j, []) if p in teams]
+        able = [r for r in job.candidates if all(r in problem.jobs[p].candidates for p in partners.get(j, []))]
+        team = placed[0] if placed else tuple(sorted(able, key=lambda r: (arrival(r), r))[:job.robots.min])
+        if len(team) < job.robots.min or not set(team) <= set(job.candidates) or len(team) > job.robots.max:
+            return None
+        ready = max([start[i] + problem.jobs[i].duration for i in before[j]] + [arrival(r) for r in team] + [0])
+        teams[j], start[j] = team, ready
+        for r in team:
+            free[r] = ready + job.duration
+            place[r] = job.location or place[r]
+    return teams, start
+
+
+def _precedence_order(problem: AllocationProblem, chosen: list[str]) -> list[str] | None:
+    before = chosen_predecessors(problem, set(chosen))
+    sorter = TopologicalSorter({j: before[j] for j in chosen})
+    try:
+        sorter.prepare()
+    except CycleError:
+        return None
+    position = {j: i for i, j in enumerate(problem.jobs)}
+    order: list[str] = []
+    while sorter.is_active():
+        ready = sorted(sorter.get_ready(), key=position.__getitem__)
+        order += ready
+        sorter.done(*ready)
+    return order
+
+
+def _partners(problem: AllocationProblem, chosen: set[str]) -> dict[str, list[str]]:
+    out: dict[str, list[str]] = {}
+    for a, b in problem.same_robots:
+        if a in chosen and b in chosen:
+            out.setdefault(a, []).append(b)
+            out.setdefault(b, []).append(a)
+    return out
+
+
+def _hint(am: AllocationModel, warm: WarmStart) -> None:
+    """Every variable of the model, from the warm start (a complete hint is one CP-SAT can take
+    as its first solution without a search)."""
+    m, problem = am.model, am.problem
+    teams = warm.teams
+    picked = set(warm.chosen)
+    for index, value in enumerate(warm.decomposition_values):
+        m.proto.solution_hint.vars.append(index)
+        m.proto.solution_hint.values.append(value)
+    for (j, r), a in am.assign.items():
+        m.add_hint(a, j in picked and r in teams[j])
+    start = _all_starts(problem, warm)
+    for j in problem.jobs:
+        m.add_hint(am.start[j], start[j])
+        m.add_hint(am.end[j], start[j] + (problem.jobs[j].duration if j in picked else 0))
+    used = warm.route_arcs(problem)
+    for robot, arcs in am.arcs.items():
+        for arc in arcs:
+            m.add_hint(arc.literal, (robot, arc.source, arc.target) in used)
+    routes = _routes(problem, warm)
+    for robot, idle in am.idle.items():
+        m.add_hint(idle, not routes[robot])
+    for (j, robot), literal in am.last.items():
+        m.add_hint(literal, bool(routes[robot]) and routes[robot][-1] == j)
+    if am.makespan is not None:
+        m.add_hint(am.makespan, max((start[j] + problem.jobs[j].duration for j in picked), default=0))
+
+
+def _routes(problem: AllocationProblem, warm: WarmStart) -> dict[str, list[str]]:
+    return {r.name: [j for j in sorted((j for j in warm.chosen if r.name in warm.teams[j]),
+                                       key=lambda j: (warm.start[j], j)) if problem.jobs[j].location is not None]
+            for r in problem.fleet.robots}
+
+
+def _all_starts(problem: AllocationProblem, warm: WarmStart) -> dict[str, int]:
+    """The warm start's times, and for the jobs not chosen the end of their latest predecessor
+    (they take no time and pass the precedences on)."""
+    before: dict[str, list[str]] = {}
+    for first, second in problem.precedences:
+        before.setdefault(second, []).append(first)
+    order = TopologicalSorter({j: before.get(j, []) for j in problem.jobs}).static_order()
+    start: dict[str, int] = {}
+    end: dict[str, int] = {}
+    for j in order:
+        if j in warm.start:
+            start[j] = warm.start[j]
+            end[j] = start[j] + problem.jobs[j].duration
+        else:
+            start[j] = end[j] = max((end[i] for i in before.get(j, [])), default=0)
+    return start

@@ -1,0 +1,93 @@
+"""JSON documents whose values know where they are: ``file:line:col`` for every key and value.
+
+Python's ``json`` module reads the values (and reports syntax errors at ``file:line:col``), but
+forgets where each value was.  A file a user writes by hand, such as a fleet, needs its
+*semantic* errors located too ("speed must be positive" at the speed's line), so the same text
+is also parsed with a small lark grammar (``grammars/json.lark``) that keeps positions, and the
+two are walked together: :class:`LocatedJson` maps each path (``("robots", 0, "speed")``) to the
+position of its value and of its key.
+"""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from typing import Any
+
+from lark import Token, Tree
+
+from ..errors import MissionError, Problem, located
+from .grammar import cached_lalr_parser
+from .text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
+
+Path = tuple[str | int, ...]
+
+
+def _constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+@dataclass(frozen=True)
+class LocatedJson:
+    """A decoded JSON document and the ``(line, column)`` of each value and key, by path."""
+
+    source: str
+    data: Any
+    values: dict[Path, tuple[int, int]]
+    keys: dict[Path, tuple[int, int]]
+
+    def at(self, path: Path, *, key: bool = False) -> str:
+        """``file:line:col`` of the value at ``path`` (of its key with ``key``); a path that is
+        not in the document (a missing key) is located at its nearest enclosing value."""
+        table = self.keys if key else self.values
+        for cut in range(len(path), -1, -1):
+            position = table.get(path[:cut]) if cut == len(path) else self.values.get(path[:cut])
+            if position is not None:
+                return located(self.source, *position)
+        return self.source
+
+
+def read_located_json(path: str | os.PathLike[str], what: str) -> LocatedJson:
+    """Read a JSON file (``what`` names it in messages: "fleet") with its positions."""
+    source = os.fspath(path)
+    return parse_located_json(decode_utf8(read_bytes(source, what), source, what), source)
+
+
+def parse_located_json(text: str, source: str) -> LocatedJson:
+    """Decode ``text``; ``NaN`` and ``Infinity``, which are not JSON, are syntax errors."""
+    try:
+        data = json.loads(text, parse_constant=_constant)
+    except json.JSONDecodeError as err:
+        raise MissionError(json_syntax_problem(err, text, source)) from None
+    except ValueError as err:  # NaN, Infinity
+        raise MissionError(Problem(source, f"invalid JSON: {err}")) from None
+    except RecursionError:
+        raise MissionError(json_depth_problem(text, source)) from None
+    tree = cached_lalr_parser("json.lark", propagate_positions=True, maybe_placeholders=False).parse(text)
+    values: dict[Path, tuple[int, int]] = {}
+    keys: dict[Path, tuple[int, int]] = {}
+    _walk(tree, (), values, keys)
+    return LocatedJson(source, data, values, keys)
+
+
+def _position(node: Tree | Token) -> tuple[int, int]:
+    if isinstance(node, Token):
+        return node.line or 1, node.column or 1
+    return node.meta.line, node.meta.column
+
+
+def _walk(node: Tree | Token, path: Path, values: dict[Path, tuple[int, int]],
+          keys: dict[Path, tuple[int, int]]) -> None:
+    """Record the position of ``node`` (the value at ``path``) and of everything inside it.
+    Duplicate keys keep the last one, as ``json.loads`` does."""
+    values[path] = _position(node)
+    if not isinstance(node, Tree) or node.data not in ("object", "array"):
+        return
+    for index, child in enumerate(node.children):
+        if node.data == "array":
+            _walk(child, (*path, index), values, keys)
+            continue
+        key_token, value = child.children
+        key = (*path, json.loads(str(key_token)))
+        keys[key] = _position(key_token)
+        _walk(value, key, values, keys)
