@@ -115,24 +115,33 @@ def _first_per_pair(kind: ConstraintKind, own: list[tuple[int, int]],
     return out
 
 
-def _decompositions(tg: TaskGraph, task: int) -> list[int]:
-    return [d.index for d in tg.decompositions_of(task)]
+class _Decompositions(dict[int, list[int]]):
+    """The decomposition vertices of each task, listed once: every constraint of a task pair is
+    expanded over them, a million times on large missions."""
+
+    def __init__(self, tg: TaskGraph) -> None:
+        super().__init__()
+        self.tg = tg
+
+    def __missing__(self, task: int) -> list[int]:
+        found = self[task] = [d.index for d in self.tg.decompositions_of(task)]
+        return found
 
 
-def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint]) -> list[Constraint]:
+def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint], decs: _Decompositions) -> list[Constraint]:
     """§6.2: SEQ/FB over all decomposition pairs; PAR only where a CD edge orders the pair."""
     out: list[Constraint] = []
     for c in task_constraints:
         if c.kind in (SEQ, FB):
-            out += [Constraint(c.kind, da, db) for da in _decompositions(tg, c.first) for db in _decompositions(tg, c.second)]
+            out += [Constraint(c.kind, da, db) for da in decs[c.first] for db in decs[c.second]]
         else:
-            for da in _decompositions(tg, c.first):
+            for da in decs[c.first]:
                 if c.second in tg.out(da, EdgeKind.CD):
-                    out += [Constraint(SEQ, da, db) for db in _decompositions(tg, c.second)]
+                    out += [Constraint(SEQ, da, db) for db in decs[c.second]]
     return out
 
 
-def _execution_constraints(tg: TaskGraph) -> list[Constraint]:
+def _execution_constraints(tg: TaskGraph, decs: _Decompositions) -> list[Constraint]:
     """§6.3: one EC per decomposition pair of every EC-linked task pair."""
     out: list[Constraint] = []
     done: set[tuple[int, int]] = set()
@@ -141,9 +150,7 @@ def _execution_constraints(tg: TaskGraph) -> list[Constraint]:
             if (t, s) in done:
                 continue
             done.add((s, t))
-            for ds in _decompositions(tg, s):
-                for dt in _decompositions(tg, t):
-                    out.append(Constraint(EC, ds, dt, group, divisible))
+            out += [Constraint(EC, ds, dt, group, divisible) for ds in decs[s] for dt in decs[t]]
     return out
 
 
@@ -200,13 +207,14 @@ def _check_robot_numbers(tg: TaskGraph, constraints: list[Constraint]) -> None:
 def generate_constraints(tg: TaskGraph) -> list[Constraint]:
     """The final constraint list over decomposition vertices, in the original's order."""
     out: list[Constraint] = []
+    decs = _Decompositions(tg)
     if not tg.unique_branch:
         root = tg.vertices[0]
         if not isinstance(root, OperatorVertex):
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
         has_cd = tg.has_edges_of_kind(EdgeKind.CD)
-        out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd))
-    out += _execution_constraints(tg)
+        out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd), decs)
+    out += _execution_constraints(tg, decs)
     out = _drop_implied(out)
     _check_robot_numbers(tg, out)
     return out
