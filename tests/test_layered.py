@@ -15,6 +15,8 @@ from hypothesis import strategies as st
 
 from mutrose_cp.solve import tiny
 from mutrose_cp.solve.boolean_model import TRUE, BoolModel, Clause, Exactly, Lit, neg
+from mutrose_cp.solve.cpsat import Component, DecompositionSpace
+from mutrose_cp.solve.encoding import Encoding
 from mutrose_cp.solve.layered import cut_into_blocks, layered_space
 from mutrose_cp.solve.tiny import free_variables
 
@@ -106,6 +108,9 @@ def test_renamed_graph_lists_the_renamed_solutions():
     renamed = layers.renamed(reversing)
     assert renamed.count == layers.count
     assert Counter(renamed.solutions()) == Counter(tuple(sorted(reversing[v] for v in s)) for s in layers.solutions())
+    for block in renamed.blocks:  # in order of their renamed choices, as listing needs them
+        assert [(e.source, e.choices, e.target) for e in block] == sorted((e.source, e.choices, e.target)
+                                                                          for e in block)
     shifting = {v: 1000 + v for v in range(1, len(bm.names))}  # the same order: the same listing
     assert list(layers.renamed(shifting).solutions()) == [tuple(v + 1000 for v in s) for s in layers.solutions()]
 
@@ -184,3 +189,35 @@ def test_wide_definitions_do_not_cut_into_blocks():
     anyone = bm.or_of([c for c in choices[::2]], "any")
     bm.records.append(Clause((-anyone,)))
     assert layered_space(bm, bm.records, choices) is None
+
+
+def written_paths(component: dict) -> int:
+    """The solutions a written layered graph stands for (docs/formats/output.md): its paths,
+    each weighted by the product of its edges' counts."""
+    paths = {0: 1}
+    for block in component["blocks"]:
+        following: dict[int, int] = {}
+        for edge in block:
+            if int(edge["from"]) in paths:
+                to = int(edge["to"])
+                following[to] = following.get(to, 0) + paths[int(edge["from"])] * int(edge["count"])
+        paths = following
+    return sum(paths.values())
+
+
+def test_written_graph_stands_for_every_solution():
+    """The output's layered graph of a component whose solutions weigh differently: its paths,
+    weighted by the edges' counts, are the component's count; its states name the door."""
+    bm, choice_vars = _door_model(4)
+    layers = layered_space(bm, bm.records, choice_vars)
+    assert layers is not None
+    decomposition_lit = {100 + v: v for v in choice_vars}
+    encoding = Encoding(bm, decomposition_lit, {}, {}, tasks=[0])
+    component = Component(list(bm.records), choice_vars, count=layers.count, layers=layers)
+    space = DecompositionSpace(encoding, [component], {v: d for d, v in decomposition_lit.items()})
+    (written,) = space.component_table(lambda d: f"t{d}")
+    assert written["count"] == str(layers.count) and "alternatives" not in written
+    assert written_paths(written) == layers.count == len(brute_force(bm, choice_vars))
+    assert any(edge["count"] == "2" for block in written["blocks"] for edge in block)
+    # after the first task: its choice to keep the door (its own literal's block needs it), the door
+    assert sorted(written["states"][1]) == [["t0keep=0", "door0=0"], ["t0keep=0", "door0=1"], ["t0keep=1", "door0=0"]]

@@ -24,6 +24,7 @@ from hypothesis import HealthCheck, Phase, given, seed, settings
 
 from conftest import ROOT, require_reference
 from missiongen import MissionSpec, load_mission, long_sequences
+from test_layered import written_paths
 from mutrose_cp.cli import main
 from mutrose_cp.errors import NoDecompositionError
 from mutrose_cp.io.decomposition_output import load_decomposition_output
@@ -145,26 +146,12 @@ def test_sequence_family_output_holds_the_layered_graph(tmp_path):
     (component,) = section["components"]
     assert "alternatives" not in component and len(component["blocks"]) == n
     assert component["count"] == section["count"] == str(_sequence_count(n))
-    assert _paths(component) == _sequence_count(n)
+    assert written_paths(component) == _sequence_count(n)
     assert component["states"][1] == [["busy(Kitchen) after AT1_1|3=0"], ["busy(Kitchen) after AT1_1|3=1"]]
     mission = Mission.load(*files)
     report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state,
                       load_decomposition_output(str(out)))
     assert report.valid and report.checked == 50
-
-
-def _paths(component: dict) -> int:
-    """The decompositions a written layered graph stands for: paths weighted by edge counts
-    (docs/formats/output.md); empty lists are written as ``""``."""
-    paths = {0: 1}
-    for block in component["blocks"]:
-        following: dict[int, int] = {}
-        for edge in block:
-            if int(edge["from"]) in paths:
-                following[int(edge["to"])] = (following.get(int(edge["to"]), 0)
-                                              + paths[int(edge["from"])] * int(edge["count"]))
-        paths = following
-    return sum(paths.values())
 
 
 # ---------------------------------------------------------------------------------------------
