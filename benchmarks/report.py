@@ -191,9 +191,9 @@ def main(argv: list[str]) -> int:
            "and ~200 constraints per room);",
            "* **coupled**: delivery where every GetFood may also mark the shared kitchen busy or free, so the "
            "parallel deliveries conflict through one fact: 3^n (2^(n+1) - 1) decompositions in one coupled "
-           "component of 2^(n+1) - 1 solutions. `count` counts it from its two conflict definitions "
-           "(`solve/hubs.py`); `--optimize` lists it below 10,000 solutions (n ≤ 12) and otherwise lets "
-           "CP-SAT find its best solution;",
+           "component of 2^(n+1) - 1 solutions. It is solved block by block as a layered graph "
+           "(`solve/layered.py`: the conflict passes from delivery to delivery as \"set so far\" and "
+           "\"cleared so far\"), so `count` and `--optimize` need no enumeration;",
            "* **coupled-sequence**: n GetFood tasks in one sequence (a goal model of its own) that mark the kitchen "
            "busy (only when it is free), free it, or pick up without marking (only when it is free): one component "
            "of about 2.414^n solutions whose tasks share the kitchen's state. It is solved block by block as a "

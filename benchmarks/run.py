@@ -48,8 +48,8 @@ RUNS = {
         ("exploratory", ["--algorithm", "exploratory"], None),
         ("cpsat", ["--limit", "1"], None),
     ],
-    # one component coupled through a shared fact (2^(n+1) - 1 solutions): counted from its
-    # conflict definitions; --optimize lists it below 10,000 solutions, else asks CP-SAT
+    # one component coupled through a shared fact (2^(n+1) - 1 solutions): solved block by block,
+    # the parallel conflict passed from delivery to delivery as a chain (solve/layered.py)
     "coupled": [
         ("count", ["count"], None),
         ("cpsat-optimize", ["--optimize"], None),

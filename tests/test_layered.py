@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from mutrose_cp.solve import tiny
-from mutrose_cp.solve.boolean_model import TRUE, BoolModel, Clause, Exactly, Lit, neg
+from mutrose_cp.solve.boolean_model import TRUE, BoolModel, Exactly, Lit, neg
 from mutrose_cp.solve.cpsat import Component, DecompositionSpace
 from mutrose_cp.solve.encoding import Encoding
 from mutrose_cp.solve.layered import cut_into_blocks, layered_space
@@ -177,18 +177,40 @@ def test_blocks_follow_the_tasks(n):
     assert layers.count == closed + opened
 
 
-def test_wide_definitions_do_not_cut_into_blocks():
-    """A definition over every task's choice (a parallel conflict) keeps them all in one
-    frontier: left to the other solvers."""
+@pytest.mark.parametrize("n", [3, 6, 300])
+def test_a_parallel_conflict_is_passed_on_as_a_chain(n):
+    """n tasks that may each set or clear one fact in parallel, never both in one mission
+    (``not (OR(setters) and OR(clearers))``): each wide definition is passed from block to block
+    as "some setter so far", so the component is layered.  The tasks that do not keep the fact
+    all set it or all clear it: 2^n + 2^n - 1 solutions."""
     bm = BoolModel()
-    choices = []
-    for k in range(30):
-        pair = (bm.new_bool(f"a{k}"), bm.new_bool(f"b{k}"))
+    setters, clearers, choice_vars = [], [], []
+    for k in range(n):
+        keep, set_, clear = (bm.new_bool(f"t{k}{w}") for w in ("keep", "set", "clear"))
+        bm.records.append(Exactly((keep, set_, clear), TRUE))
+        setters.append(set_)
+        clearers.append(clear)
+        choice_vars += [keep, set_, clear]
+    some_set, some_cleared = bm.or_of(setters, "set"), bm.or_of(clearers, "cleared")
+    bm.clause([-some_set, -some_cleared])
+    layers = layered_space(bm, bm.records, choice_vars)
+    assert layers is not None
+    assert max(len(f) for f in layers.frontiers) <= 4
+    assert layers.count == 2 ** (n + 1) - 1
+    if n <= 6:
+        assert Counter(layers.solutions()) == Counter(brute_force(bm, choice_vars))
+
+
+def test_long_range_couplings_do_not_cut_into_blocks():
+    """Task i constrained together with task n-1-i: the middle of the sequence would pass on
+    half the tasks' choices, more than a frontier holds; left to the other solvers."""
+    bm = BoolModel()
+    pairs = [(bm.new_bool(f"a{k}"), bm.new_bool(f"b{k}")) for k in range(40)]
+    for pair in pairs:
         bm.records.append(Exactly(pair, TRUE))
-        choices += pair
-    anyone = bm.or_of([c for c in choices[::2]], "any")
-    bm.records.append(Clause((-anyone,)))
-    assert layered_space(bm, bm.records, choices) is None
+    for k in range(20):
+        bm.clause([pairs[k][0], pairs[39 - k][0]])
+    assert layered_space(bm, bm.records, [v for pair in pairs for v in pair]) is None
 
 
 def written_paths(component: dict) -> int:

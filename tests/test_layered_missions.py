@@ -154,6 +154,28 @@ def test_sequence_family_output_holds_the_layered_graph(tmp_path):
     assert report.valid and report.checked == 50
 
 
+def test_parallel_coupled_family_is_layered_too(tmp_path):
+    """The parallel deliveries that set and clear the kitchen (the ``coupled`` family): their
+    conflict passes from delivery to delivery as a chain, so the coupled component of
+    2^(n+1) - 1 solutions is written as n blocks; every path lists the exploratory result."""
+    require_reference()
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from generate import generate
+
+    files = generate("coupled", 4, tmp_path)
+    explored = Counter(frozenset(d) for d in Mission.load(*files).exploratory())
+    for path in PATHS:
+        listed, count, layered = _decompositions(files, path)
+        assert layered == (path != "cpsat") and count == 3**4 * (2**5 - 1), path
+        assert Counter(listed) == explored, path
+    out = tmp_path / "out.json"
+    with contextlib.redirect_stderr(io.StringIO()):
+        assert main(["decompose", *map(str, generate("coupled", 10, tmp_path / "ten")), "-q", "-o", str(out)]) == 0
+    components = json.loads(out.read_text())["mission_decomposition_space"]["components"]
+    (coupled,) = [c for c in components if "blocks" in c]
+    assert coupled["count"] == str(2**11 - 1) == str(written_paths(coupled)) and len(coupled["blocks"]) == 10
+
+
 # ---------------------------------------------------------------------------------------------
 # Generated long sequences
 

@@ -296,7 +296,7 @@ class DecompositionSpace:
         """``states``: per layer, each state as the values of the variables the blocks around it
         share; ``blocks``: per block, its edges with the task decompositions they choose."""
         names = self.encoding.model.names
-        states = [[[f"{names[v]}={value}" for v, value in zip(frontier, state)] for state in layer]
+        states = [[[f"{layers.names.get(v) or names[v]}={value}" for v, value in zip(frontier, state)] for state in layer]
                   for frontier, layer in zip(layers.frontiers, layers.states)]
         blocks = [[{"from": str(e.source), "to": str(e.target),
                     "decompositions": [key(d) for d in sorted(self.var_to_dec[v] for v in e.choices)],

@@ -310,8 +310,9 @@ class Encoder:
                         if self.tg.vertices[a].parent != self.tg.vertices[b].parent:
                             self.m.clause([neg(self.x[a]), neg(self.x[b])], label)
             else:
-                any_pos = self.m.or_of([self.x[a] for a in c.setting_true], f"anypos({atom})")
-                any_neg = self.m.or_of([self.x[b] for b in c.setting_false], f"anyneg({atom})")
+                fact = f"{atom[0]}({', '.join(atom[1])})"
+                any_pos = self.m.or_of([self.x[a] for a in c.setting_true], f"{fact} set below {v}")
+                any_neg = self.m.or_of([self.x[b] for b in c.setting_false], f"{fact} cleared below {v}")
                 self.m.clause([neg(any_pos), neg(any_neg)], label)
 
     def _achieve(self, v: int, goal: str, test: Test) -> None:

@@ -4,9 +4,11 @@ Tasks in a sequence that set, clear and test a few shared facts (a door, a charg
 lift) make one component, and enumerating it costs its number of solutions, which grows
 exponentially with the number of tasks.  The encoder writes the value of a fact as a chain, one
 step per writer (:meth:`.encoding.Encoder._bool_value`), so between two tasks of the sequence
-the whole shared state is a few variables.  Here the component is cut into *blocks* along its
-variables, and each block is compiled into a transition relation over the variables it shares
-with the blocks around it:
+the whole shared state is a few variables.  Parallel tasks that may set and clear one fact are
+coupled by one wide definition (``anypos <=> OR(setters)``); it is written here as a chain too
+(:func:`as_chains`), so what passes from task to task is "some setter so far".  The component
+is cut into *blocks* along its variables, and each block is compiled into a transition relation
+over the variables it shares with the blocks around it:
 
 * every variable gets a *position*: a free variable (no record defines it) the largest id among
   the literals of its exactly-one choices (the encoder creates a task's decomposition literals
@@ -22,23 +24,24 @@ layer.  So the number of solutions is a sum over paths (computed backwards, line
 of blocks), a uniform sample draws edges weighted by the solutions behind them, the least-cost
 solution is a shortest path, and the solutions are listed lazily, depth first, edges in order
 of their choices.  A component that does not cut into small frontiers (``MAX_FRONTIER``,
-``MAX_STATES``) or has a block too large to enumerate (``MAX_BLOCK_FREE``) is left to the other
-solvers.  ``tests/test_layered.py`` compares all four with brute-force enumeration.
+``MAX_STATES``) or has a block too large to enumerate (``MAX_BLOCK_FREE``, ``MAX_BLOCK_WORK``)
+is left to the other solvers.  ``tests/test_layered.py`` compares all four with brute-force enumeration.
 """
 from __future__ import annotations
 
 import itertools
 import random
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Iterator, Mapping, Sequence
 
-from .boolean_model import BoolModel, Exactly, Record, VariableGroups
+from .boolean_model import AndOf, BoolModel, Exactly, Lit, OrOf, Record, VariableGroups
 from .tiny import defined_variable, free_variables, holds
 
 MAX_FRONTIER = 16  # variables passed from one block to the next
 MAX_STATES = 256  # values of one frontier that solutions take
 MAX_BLOCK_FREE = 12  # free variables of one block, enumerated for each state before it
+MAX_BLOCK_WORK = 1 << 16  # states before a block x assignments of its free variables
 
 State = tuple[int, ...]  # values of a frontier's variables, in the frontier's order
 
@@ -59,11 +62,13 @@ class Edge:
 class LayeredSpace:
     """The solutions of a component as paths through layers of states.  ``frontiers[k]`` are the
     variables of layer k, ``states[k]`` their values; ``blocks[k]`` are the edges from layer k
-    to layer k+1, ordered by source state, then by choices, then by target."""
+    to layer k+1, ordered by source state, then by choices, then by target.  Frontier variables
+    may be steps of a chain that the model does not have (:func:`as_chains`): ``names`` names them."""
 
     frontiers: list[tuple[int, ...]]
     states: list[list[State]]
     blocks: list[list[Edge]]
+    names: dict[int, str] = field(default_factory=dict)  # frontier variables the model does not name
 
     def __post_init__(self) -> None:
         self._outgoing = [[[e for e in block if e.source == s] for s in range(len(self.states[k]))]
@@ -172,7 +177,9 @@ class LayeredSpace:
         are put back in order of their renamed choices."""
         blocks = [sorted((Edge(e.source, e.target, tuple(sorted(rename[v] for v in e.choices)), e.multiplicity)
                           for e in block), key=_edge_order) for block in self.blocks]
-        return LayeredSpace([tuple(rename[v] for v in f) for f in self.frontiers], self.states, blocks)
+        # the steps of chains keep their numbers (and names): they are not the model's variables
+        return LayeredSpace([tuple(rename.get(v, v) for v in f) for f in self.frontiers], self.states, blocks,
+                            self.names)
 
 
 def _edge_order(e: Edge) -> tuple[int, tuple[int, ...], int]:
@@ -188,6 +195,7 @@ def layered_space(bm: BoolModel, records: Sequence[Record], choice_vars: Sequenc
     with small frontiers (then it is solved as a whole)."""
     if free_variables(records) is None:
         return None  # not in definition order
+    records, names = as_chains(bm, records)
     blocks = cut_into_blocks(records)
     if len(blocks) < 2:
         return None
@@ -199,7 +207,7 @@ def layered_space(bm: BoolModel, records: Sequence[Record], choice_vars: Sequenc
     edges: list[list[Edge]] = []
     for k, block in enumerate(blocks):
         enumerator = _BlockEnumerator(bm, block, frontiers[k], frontiers[k + 1], choice)
-        if not enumerator.applies():
+        if not enumerator.applies() or len(states[k]) << len(enumerator.free) > MAX_BLOCK_WORK:
             return None
         following: dict[State, int] = {}
         block_edges = []
@@ -210,7 +218,39 @@ def layered_space(bm: BoolModel, records: Sequence[Record], choice_vars: Sequenc
             return None
         states.append(list(following))
         edges.append(block_edges)
-    return _pruned(frontiers, states, edges)
+    return _pruned(frontiers, states, edges, names)
+
+
+def as_chains(bm: BoolModel, records: Sequence[Record]) -> tuple[list[Record], dict[int, str]]:
+    """The records with every AND or OR definition over more than two literals written as a
+    chain of two-literal steps (literals in order of their variables), and the names of the
+    steps' new variables (numbered after the model's).
+
+    Parallel tasks that set and clear one fact are coupled by ``anypos <=> OR(setters)``: as one
+    record it keeps every setter in the frontier up to the last block; as a chain, each block
+    passes on one value, "some setter so far".  Each step is an equivalence, so the solutions
+    (and their number) stay the same."""
+    out: list[Record] = []
+    names: dict[int, str] = {}
+    for r in records:
+        if not isinstance(r, (AndOf, OrOf)) or len(r.lits) <= 2:
+            out.append(r)
+            continue
+        lits = sorted(r.lits, key=lambda l: abs(l) if isinstance(l, int) else 0)
+        so_far = lits[0]
+        for lit in lits[1:-1]:
+            step = len(bm.names) + len(names)
+            names[step] = f"{bm.names[r.target]} up to {_name(bm, lit)}"
+            out.append(type(r)((so_far, lit), step))
+            so_far = step
+        out.append(type(r)((so_far, lits[-1]), r.target))
+    return out, names
+
+
+def _name(bm: BoolModel, lit: Lit) -> str:
+    if not isinstance(lit, int):
+        return lit.value
+    return bm.names[lit] if lit > 0 else f"not {bm.names[-lit]}"
 
 
 def cut_into_blocks(records: Sequence[Record]) -> list[list[Record]]:
@@ -290,11 +330,13 @@ class _BlockEnumerator:
         self.given = given
         self.passed = passed
         known = set(given)
-        self.free = [v for v in free_variables(records) or () if v not in known]
+        in_order = free_variables(records)
+        self.in_order = in_order is not None  # definitions before their uses
+        self.free = [v for v in in_order or () if v not in known]
         self.own_choices = [v for v in self.free if v in choice]
 
     def applies(self) -> bool:
-        return len(self.free) <= MAX_BLOCK_FREE and not any(v in self.bm.ints for v in self.free)
+        return self.in_order and len(self.free) <= MAX_BLOCK_FREE and not any(v in self.bm.ints for v in self.free)
 
     def solutions(self, state: State) -> Counter[tuple[State, tuple[int, ...]]]:
         """(state after the block, true choice literals) of each assignment that satisfies the
@@ -308,7 +350,8 @@ class _BlockEnumerator:
         return found
 
 
-def _pruned(frontiers: list[tuple[int, ...]], states: list[list[State]], edges: list[list[Edge]]) -> LayeredSpace:
+def _pruned(frontiers: list[tuple[int, ...]], states: list[list[State]], edges: list[list[Edge]],
+            names: dict[int, str]) -> LayeredSpace:
     """The graph without the states from which no path reaches the end, states renumbered in
     order of first use and edges sorted (see :class:`LayeredSpace`)."""
     alive = [set(range(len(layer))) for layer in states]
@@ -326,4 +369,4 @@ def _pruned(frontiers: list[tuple[int, ...]], states: list[list[State]], edges: 
         blocks.append(sorted((Edge(number[k][e.source], following[e.target], e.choices, e.multiplicity) for e in kept),
                              key=_edge_order))
     layers = [[states[k][old] for old in sorted(number[k], key=number[k].__getitem__)] for k in range(len(states))]
-    return LayeredSpace(frontiers, layers, blocks)
+    return LayeredSpace(frontiers, layers, blocks, {v: names[v] for f in frontiers for v in f if v in names})
