@@ -90,9 +90,6 @@ def least_cost(space: DecompositionSpace, costs: Mapping[int, int]) -> tuple[lis
 
 def _cheapest(space: DecompositionSpace, component: Component, costs: Mapping[int, int]) -> list[int]:
     """The decomposition vertices of ``component``'s cheapest solution."""
-    from .proto import ProtoBuilder
-    from .run import INFEASIBLE, OPTIMAL, run_solver
-
     var_to_dec = space.var_to_dec
     if component.solutions is None and component.layers is not None:
         best_layered, _ = component.layers.least_cost({v: costs.get(var_to_dec[v], 0) for v in component.choice_vars})
@@ -101,6 +98,9 @@ def _cheapest(space: DecompositionSpace, component: Component, costs: Mapping[in
         best = min(component.solutions,
                    key=lambda s: (sum(costs.get(var_to_dec[v], 0) for v in s), sorted(s)))
         return [var_to_dec[v] for v in best]
+    from .proto import ProtoBuilder  # the CP-SAT layer, loaded when a component needs it
+    from .run import INFEASIBLE, OPTIMAL, run_solver
+
     builder = ProtoBuilder(space.encoding.model)
     for r in component.records:
         builder.post(r)
