@@ -8,6 +8,7 @@ The signal is sent by the process itself when the phase named in ``$MUTROSE_CP_F
 from __future__ import annotations
 
 import os
+import random
 import signal
 import subprocess
 import sys
@@ -24,21 +25,31 @@ EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 SENTINEL = "previous output, must survive\n"
 
 
-FACTS = ("lit", "warm", "loud")
+FACTS = ("lit", "warm", "loud", "open", "wet", "cold", "dark", "busy", "clean", "full", "hot", "dry", "shut",
+         "lent", "sold", "kept")
+SWITCHES = 20
 
 
 def _coupled_mission(folder: Path) -> Path:
-    """20 parallel tasks that each switch a light (with its heater and fan) on, off or leave it:
-    one component of about two million solutions, which takes CP-SAT many seconds to enumerate.
-    (With one fact the component would be counted at once from its two conflict definitions,
-    ``solve/hubs.py``; three facts make six, more than that counting takes on.)"""
-    acts = (Action("wait-here"), Action("switch-on", eff=tuple(Lit(f, "?rm") for f in FACTS)),
-            Action("switch-off", eff=tuple(Lit(f, "?rm", False) for f in FACTS)))
-    toggle = Task("Toggle", (Method("m-on", (), ("switch-on",)), Method("m-off", (), ("switch-off",)),
-                             Method("m-wait", (), ("wait-here",))))
-    tree = GoalNode(tuple(TaskNode("Toggle") for _ in range(20)), annotation=("flat", "#"))
-    MissionSpec(FACTS, ("charged",), acts, (toggle,), (Room("Room1", True, tuple((f, None) for f in FACTS), 0),),
-                True, "", tree).write(folder)
+    """20 parallel switches, each turning its own half of 16 room facts on, off or leaving them:
+    one component of about two million solutions (no switch may turn on a fact that another
+    turns off), which takes CP-SAT many seconds to enumerate.  Neither faster way applies: the
+    facts each switch touches differ, so what the switches so far have set and cleared takes
+    too many values to pass from block to block (``solve/layered.py``), and twenty conflict
+    definitions are more than counting from them takes on (``solve/hubs.py``)."""
+    actions = [Action("wait-here")]
+    tasks = []
+    for k in range(SWITCHES):
+        name = "Switch" + "".join(chr(ord("A") + int(d)) for d in f"{k:02d}")  # letters only: SwitchAA, ...
+        touched = random.Random(k).sample(FACTS, len(FACTS) // 2)
+        on, off = f"switch-on-{k}", f"switch-off-{k}"
+        actions += [Action(on, eff=tuple(Lit(f, "?rm") for f in touched)),
+                    Action(off, eff=tuple(Lit(f, "?rm", False) for f in touched))]
+        tasks.append(Task(name, (Method(f"m-on-{k}", (), (on,)), Method(f"m-off-{k}", (), (off,)),
+                                 Method(f"m-wait-{k}", (), ("wait-here",)))))
+    tree = GoalNode(tuple(TaskNode(t.name) for t in tasks), annotation=("flat", "#"))
+    MissionSpec(FACTS, ("charged",), tuple(actions), tuple(tasks),
+                (Room("Room1", True, tuple((f, None) for f in FACTS), 0),), True, "", tree).write(folder)
     return folder
 
 

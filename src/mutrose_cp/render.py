@@ -524,7 +524,6 @@ def _nth(mission: "Mission", index: int) -> tuple[list[int], int, int]:
                            f"mission decompositions (indices 0 to {total - 1})")
     if index < 0:
         index += total
-    listed = [c.solutions for c in space.components]
     digits = []
     rest = index
     for c in reversed(space.components):
@@ -532,10 +531,13 @@ def _nth(mission: "Mission", index: int) -> tuple[list[int], int, int]:
         digits.append(d)
     digits.reverse()
     parts = []
-    for solutions, d in zip(listed, digits):
-        if solutions is None:
+    for c, d in zip(space.components, digits):
+        if c.solutions is not None:
+            parts.append(c.solutions[d])
+        elif c.layers is not None:
+            parts.append(frozenset(c.layers.solution_at(d)))
+        else:
             raise MissionError("a component of the decomposition space has too many solutions to list")
-        parts.append(solutions[d])
     decs = [space.var_to_dec[v] for p in parts for v in p] + list(space.fixed)
     return sorted(decs), index, total
 

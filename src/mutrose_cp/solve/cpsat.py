@@ -6,8 +6,11 @@ components' solutions, so the space is counted exactly as a product, streamed wi
 counter, sampled uniformly by sampling each component, and optimised component by component.
 Each component is solved by CP-SAT (``enumerate_all_solutions`` with one worker: with more
 workers solutions were lost or repeated); components that are a single exactly-one choice are
-read off directly, and tiny ones enumerated in Python (:mod:`.tiny`).  The CP-SAT layer
-(:mod:`.proto`, :mod:`.run`) is loaded on first use: small missions often need none.
+read off directly, tiny ones enumerated in Python (:mod:`.tiny`), ones that cut into blocks
+sharing a little state solved as a layered graph (:mod:`.layered`: counted, listed, sampled and
+optimised without enumerating them), and ones coupled by a few wide definitions counted from
+them (:mod:`.hubs`).  The CP-SAT layer (:mod:`.proto`, :mod:`.run`) is loaded on first use:
+small missions often need none.
 """
 from __future__ import annotations
 
@@ -16,7 +19,7 @@ import math
 import random
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable, Iterator, Sequence
+from typing import Callable, Iterator, Protocol, Sequence
 
 from ..errors import MissionError
 from .boolean_model import (
@@ -36,10 +39,14 @@ from .boolean_model import (
 )
 from .encoding import Encoding
 from .hubs import count_by_hubs
+from .layered import LayeredSpace, layered_space
 from .tiny import enumerate_tiny
 
 
 ENUMERATION_CAP = 2_000_000  # solutions kept per component; beyond that a component is counted only
+# a layered component with at most this many solutions is also listed in full, in the canonical
+# order of enumerated components; a larger one is listed lazily from its layers
+LAYERED_LIST_LIMIT = 10_000
 
 
 # ---------------------------------------------------------------------------------------------
@@ -58,6 +65,7 @@ class Component:
     choice_vars: list[int]  # decomposition literals of the component (positive var ids)
     solutions: list[frozenset[int]] | None = None  # chosen decomposition vertices per solution
     count: int = 0
+    layers: LayeredSpace | None = None  # the component as a layered graph, when it cuts into blocks
 
 
 def _components(enc: Encoding) -> list[Component]:
@@ -104,7 +112,9 @@ def _simple_choice(comp: Component) -> list[frozenset[int]] | None:
 
 def solve_component(bm: BoolModel, comp: Component, keep: bool = True, list_limit: int = ENUMERATION_CAP) -> None:
     """Enumerate a component's solutions (as sets of decomposition literals).  A component
-    counted without enumeration (:mod:`.hubs`) is listed only up to ``list_limit`` solutions."""
+    counted without enumeration (:mod:`.hubs`) is listed only up to ``list_limit`` solutions; one
+    solved as layers (:mod:`.layered`) is listed in full only up to ``LAYERED_LIST_LIMIT`` of them
+    (in the canonical order), and lazily from its layers beyond."""
     if not comp.records or comp.solutions == [] and not comp.choice_vars:
         return
     simple = _simple_choice(comp)
@@ -115,6 +125,12 @@ def solve_component(bm: BoolModel, comp: Component, keep: bool = True, list_limi
     found: tuple[int, list[frozenset[int]] | None] | None
     found = enumerate_tiny(bm, comp.records, comp.choice_vars)  # at most 4096 solutions: listed
     if found is None:
+        comp.layers = layered_space(bm, comp.records, comp.choice_vars)
+        if comp.layers is not None:
+            comp.count = comp.layers.count
+            listed = keep and comp.count <= min(list_limit, LAYERED_LIST_LIMIT)
+            comp.solutions = sorted(map(frozenset, comp.layers.solutions()), key=sorted) if listed else None
+            return
         counted = count_by_hubs(bm, comp.records, lambda records, watched: _block_solutions(bm, records, watched))
         if counted is not None and (not keep or counted > list_limit):
             comp.count, comp.solutions = counted, None  # counted without listing (too many to list)
@@ -186,13 +202,19 @@ class DecompositionSpace:
         for suffix in self._odometer(self._choices(), 0):
             yield sorted(itertools.chain(self.fixed, suffix))
 
-    def _choices(self) -> list[list[tuple[int, ...]]]:
-        """Each component's solutions as sorted decomposition vertices."""
-        if any(c.solutions is None for c in self.components):
-            raise MissionError(f"a part of the mission has more than {ENUMERATION_CAP} alternative "
-                               "decompositions on its own: they can be counted (count) but not listed")
-        return [[tuple(sorted(self.var_to_dec[v] for v in sol)) for sol in c.solutions]  # type: ignore[union-attr]
-                for c in self.components]
+    def _choices(self) -> list[Alternatives]:
+        """Each component's solutions as sorted decomposition vertices: listed, or lazily from
+        its layers."""
+        choices: list[Alternatives] = []
+        for c in self.components:
+            if c.solutions is not None:
+                choices.append(Listed([tuple(sorted(self.var_to_dec[v] for v in sol)) for sol in c.solutions]))
+            elif c.layers is not None:
+                choices.append(FromLayers(c.layers, self.var_to_dec))
+            else:
+                raise MissionError(f"a part of the mission has more than {ENUMERATION_CAP} alternative "
+                                   "decompositions on its own: they can be counted (count) but not listed")
+        return choices
 
     def split_listing(self, limit: int | None) -> tuple[list[int], Iterator[list[int]]] | None:
         """The first ``limit`` decompositions (all if None) as one part common to all of them and
@@ -204,9 +226,9 @@ class DecompositionSpace:
         if not self.encoding.tasks or any(c.count == 0 for c in self.components) or self.fixed:
             return None
         choices = self._choices()
-        bounds = [(min(min(s) for s in ch if s), max(max(s) for s in ch if s)) if any(ch) else None for ch in choices]
         last = -1
-        for b in bounds:
+        for ch in choices:
+            b = ch.bounds()
             if b is None:
                 continue
             if b[0] <= last:
@@ -219,28 +241,33 @@ class DecompositionSpace:
             varying += 1
             product *= c.count
         fixed_part = len(choices) - varying
-        prefix = [d for ch in choices[:fixed_part] for d in ch[0]]
+        prefix = [d for ch in choices[:fixed_part] for d in ch.first()]
         return prefix, self._odometer(choices, fixed_part)
 
-    def _odometer(self, choices: list[list[tuple[int, ...]]], start: int) -> Iterator[list[int]]:
-        """Concatenations of one choice per component from ``start`` on, last varying fastest."""
+    @staticmethod
+    def _odometer(choices: Sequence[Alternatives], start: int) -> Iterator[list[int]]:
+        """Concatenations of one choice per component from ``start`` on, last varying fastest
+        (each component's choices iterated again when the one before it moves on)."""
         comps = choices[start:]
-        idx = [0] * len(comps)
+        iterators = [iter(ch) for ch in comps]
+        current = [next(it) for it in iterators]
         while True:
-            yield [d for ch, i in zip(comps, idx) for d in ch[i]]
+            yield [d for part in current for d in part]
             k = len(comps) - 1
             while k >= 0:
-                idx[k] += 1
-                if idx[k] < len(comps[k]):
+                following = next(iterators[k], None)
+                if following is not None:
+                    current[k] = following
                     break
-                idx[k] = 0
+                iterators[k] = iter(comps[k])
+                current[k] = next(iterators[k])
                 k -= 1
             if k < 0:
                 return
 
     def sample(self, k: int, seed: int) -> list[list[int]]:
         """``k`` decompositions drawn uniformly and independently (with replacement)."""
-        if any(c.solutions is None for c in self.components):
+        if any(c.solutions is None and c.layers is None for c in self.components):
             raise MissionError(f"a part of the mission has more than {ENUMERATION_CAP} alternative "
                                "decompositions on its own: uniform sampling needs them listed")
         if self.count == 0:
@@ -248,16 +275,80 @@ class DecompositionSpace:
         rng = random.Random(seed)
         out = []
         for _ in range(k):
-            out.append(self._decompositions([rng.choice(c.solutions) for c in self.components]))  # type: ignore[arg-type]
+            out.append(self._decompositions([rng.choice(c.solutions) if c.solutions is not None
+                                             else frozenset(c.layers.sample(rng))  # type: ignore[union-attr]
+                                             for c in self.components]))
         return out
 
     def component_table(self, key: Callable[[int], str]) -> list[dict[str, object]]:
-        """Per component: its alternative sets of task decompositions (by output key)."""
+        """Per component: its alternative sets of task decompositions (by output key), or its
+        layered graph when it was solved block by block."""
         table: list[dict[str, object]] = []
         for c in self.components:
+            if c.layers is not None:
+                table.append({"count": str(c.count), **self._layer_table(c.layers, key)})
+                continue
             alts = [sorted(self.var_to_dec[v] for v in s) for s in c.solutions or []]
             table.append({"count": str(c.count), "alternatives": [[key(d) for d in a] for a in alts]})
         return table
+
+    def _layer_table(self, layers: LayeredSpace, key: Callable[[int], str]) -> dict[str, object]:
+        """``states``: per layer, each state as the values of the variables the blocks around it
+        share; ``blocks``: per block, its edges with the task decompositions they choose."""
+        names = self.encoding.model.names
+        states = [[[f"{layers.names.get(v) or names[v]}={value}" for v, value in zip(frontier, state)] for state in layer]
+                  for frontier, layer in zip(layers.frontiers, layers.states)]
+        blocks = [[{"from": str(e.source), "to": str(e.target),
+                    "decompositions": [key(d) for d in sorted(self.var_to_dec[v] for v in e.choices)],
+                    "count": str(e.multiplicity)} for e in block] for block in layers.blocks]
+        return {"states": states, "blocks": blocks}
+
+
+class Alternatives(Protocol):
+    """A component's solutions as sorted decomposition vertices, iterable again and again."""
+
+    def __iter__(self) -> Iterator[tuple[int, ...]]: ...
+
+    def first(self) -> tuple[int, ...]: ...
+
+    def bounds(self) -> tuple[int, int] | None:
+        """The least and greatest vertex of any solution (None when every solution is empty)."""
+
+
+@dataclass
+class Listed:
+    """Solutions listed in full."""
+
+    solutions: list[tuple[int, ...]]
+
+    def __iter__(self) -> Iterator[tuple[int, ...]]:
+        return iter(self.solutions)
+
+    def first(self) -> tuple[int, ...]:
+        return self.solutions[0]
+
+    def bounds(self) -> tuple[int, int] | None:
+        if not any(self.solutions):
+            return None
+        return min(min(s) for s in self.solutions if s), max(max(s) for s in self.solutions if s)
+
+
+@dataclass
+class FromLayers:
+    """Solutions listed lazily from a layered graph, in its order."""
+
+    layers: LayeredSpace
+    var_to_dec: dict[int, int]
+
+    def __iter__(self) -> Iterator[tuple[int, ...]]:
+        return (tuple(sorted(self.var_to_dec[v] for v in sol)) for sol in self.layers.solutions())
+
+    def first(self) -> tuple[int, ...]:
+        return next(iter(self))
+
+    def bounds(self) -> tuple[int, int] | None:
+        vertices = [self.var_to_dec[v] for v in self.layers.choice_variables()]
+        return (min(vertices), max(vertices)) if vertices else None
 
 
 def _signature(bm: BoolModel, comp: Component) -> tuple[tuple[object, ...], list[int]]:
@@ -319,6 +410,7 @@ def build_space(enc: Encoding, keep: bool = True, progress: Callable[[int, int],
                 first_order, first = hit
                 rename = dict(zip(first_order, order))
                 comp.count = first.count
+                comp.layers = None if first.layers is None else first.layers.renamed(rename)
                 comp.solutions = (None if first.solutions is None else
                                   sorted((frozenset(rename[v] for v in sol) for sol in first.solutions), key=sorted))
         else:

@@ -14,7 +14,7 @@ auxiliary variable is defined by an equivalence, so each solution is a distinct 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable
+from typing import Any, Callable, Generic, Iterable, TypeVar
 
 from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
@@ -39,6 +39,7 @@ from .semantics import (
 )
 
 SCALE = 1000  # numeric values are compared as integers in thousandths
+V = TypeVar("V")  # the value a chain of writers carries
 
 
 @dataclass
@@ -75,7 +76,10 @@ class Encoder:
         self.active: dict[int, Lit] = {}
         self.or_lits: dict[tuple[int, int], Lit] = {}
         self.labels: dict[str, str] = {}
-        self._chain_cache: dict[tuple[AtomKey, tuple[tuple[int, bool], ...]], tuple[Lit, Lit]] = {}
+        # the value of each atom after a prefix of its writers, as a tree of prefixes
+        self._bool_chains: dict[AtomKey, _Chain[tuple[Lit, Lit]]] = {}
+        self._num_chains: dict[AtomKey, _Chain[tuple[Lit, int | None]]] = {}
+        self._last_chain: dict[AtomKey, tuple[tuple[tuple[int, bool], ...], _Chain[tuple[Lit, Lit]]]] = {}
         order = application_order(self.effects)
         self.bool_writers: dict[AtomKey, list[tuple[int, bool]]] = {}
         self.num_writers: dict[AtomKey, list[tuple[int, str, float]]] = {}
@@ -154,28 +158,41 @@ class Encoder:
     # --- world values ------------------------------------------------------------------------------
     def _bool_value(self, atom: AtomKey, writers: list[tuple[int, bool]]) -> tuple[Lit, Lit]:
         """(known, true) literals of ``atom`` after the chosen ``writers`` (in Task Graph order) have been
-        applied to the initial state."""
-        key = (atom, tuple(writers))
-        if key in self._chain_cache:
-            return self._chain_cache[key]
+        applied to the initial state.
+
+        The value is a chain, one step per writer: after writer ``w`` it is ``w``'s value if ``w`` is
+        chosen, else the value before.  Tests that see a common prefix of writers (the tasks of a
+        sequence) share its steps, so the whole state of the atom between two tasks is one pair of
+        literals: components of tasks coupled through a few facts decompose block by block
+        (:mod:`.layered`)."""
+        node, done = self._chain_root(atom, self._bool_chains, self._bool_start), 0
+        key = tuple(writers)
+        previous = self._last_chain.get(atom)
+        if previous is not None and key[:len(previous[0])] == previous[0]:
+            node, done = previous[1], len(previous[0])  # a sequence's tasks see ever longer prefixes
+        for w, pol in writers[done:]:
+            step = node.next.get((w, pol))
+            if step is None:
+                known_before, true_before = node.value
+                xw = self.x[w]
+                name = f"{atom[0]}({', '.join(atom[1])}) after {self.tg.vertices[w].content}"
+                value = (self.m.or_of([xw, known_before], f"known {name}"),
+                         self.m.or_of([xw, true_before], name) if pol else self.m.and_of([neg(xw), true_before], name))
+                step = node.next[(w, pol)] = _Chain(value)
+            node = step
+        self._last_chain[atom] = (key, node)
+        return node.value
+
+    def _bool_start(self, atom: AtomKey) -> tuple[Lit, Lit]:
         init = self.facts.get(atom)
-        known: Lit = FALSE if init is None else TRUE
-        value: Lit = TRUE if init else FALSE
-        # value after writers = value of the last chosen writer, else the initial value
-        later: list[Lit] = []
-        true_parts: list[Lit] = []
-        for w, pol in reversed(writers):
-            xw = self.x[w]
-            last = self.m.and_of([xw] + [neg(l) for l in later], f"last({w},{atom})")
-            if pol:
-                true_parts.append(last)
-            later.append(xw)
-        none_chosen = self.m.and_of([neg(l) for l in later], f"none({atom})")
-        any_chosen = neg(none_chosen)
-        known_lit = self.m.or_of([known, any_chosen], f"known({atom})")
-        true_lit = self.m.or_of(true_parts + [self.m.and_of([none_chosen, value], f"init({atom})")], f"true({atom})")
-        self._chain_cache[key] = (known_lit, true_lit)
-        return known_lit, true_lit
+        return (FALSE if init is None else TRUE), (TRUE if init else FALSE)
+
+    @staticmethod
+    def _chain_root(atom: AtomKey, chains: dict[AtomKey, "_Chain[V]"], start: Callable[[AtomKey], V]) -> "_Chain[V]":
+        root = chains.get(atom)
+        if root is None:
+            root = chains[atom] = _Chain(start(atom))
+        return root
 
     def _bool_holds(self, atom: AtomKey, positive: bool, writers: list[tuple[int, bool]], name: str) -> Lit:
         """Literal: the open-world test ``atom == positive`` holds after ``writers``."""
@@ -192,23 +209,33 @@ class Encoder:
             if init is None:
                 return TRUE
             return TRUE if compare(init, op, bound) else FALSE
-        m = self.m
-        scaled = [(w, kind, round(amount * SCALE)) for w, kind, amount in writers]
-        span = sum(abs(a) for _, _, a in scaled) + abs(round((init or 0) * SCALE)) + 1
-        known: Lit = TRUE if init is not None else FALSE
-        prev_var: int | None = None
+        known, value = self._num_value(atom, writers)
+        assert isinstance(value, int)
+        sat = self.m.new_bool(f"cmp({atom}{op}{bound})")
+        self.m.records.append(Compare(sat, value, op, round(bound * SCALE)))
+        return self.m.or_of([neg(known), sat], name)
+
+    def _num_value(self, atom: AtomKey, writers: list[tuple[int, str, float]]) -> tuple[Lit, int | None]:
+        """(known literal, integer variable) of ``atom`` after the chosen ``writers``: a chain of
+        :class:`ValueAfter` steps shared by the tests that see a common prefix of writers (as
+        :meth:`_bool_value`); the variable is None before the first writer."""
+        init = self.values.get(atom)
         prev_const = round(init * SCALE) if init is not None else 0
-        for w, kind, amount in scaled:
-            xw = self.x[w]
-            nxt = m.new_int(f"val({atom})@{w}", -span, span)
-            m.records.append(ValueAfter(xw, known, nxt, prev_var, prev_const, amount, NumericEffectKind(kind)))
-            known = m.or_of([known, xw], f"known({atom})@{w}")
-            prev_var = nxt
-        cur = prev_var
-        sat = m.new_bool(f"cmp({atom}{op}{bound})")
-        assert cur is not None
-        m.records.append(Compare(sat, cur, op, round(bound * SCALE)))
-        return m.or_of([neg(known), sat], name)
+        node = self._chain_root(atom, self._num_chains, lambda _: (TRUE if init is not None else FALSE, None))
+        span = abs(prev_const) + 1
+        for w, kind, amount in writers:
+            scaled = round(amount * SCALE)
+            span += abs(scaled)
+            step = node.next.get((w, kind, scaled))
+            if step is None:
+                known, prev_var = node.value
+                xw = self.x[w]
+                name = f"{atom[0]}({', '.join(atom[1])}) after {self.tg.vertices[w].content}"
+                nxt = self.m.new_int(name, -span, span)
+                self.m.records.append(ValueAfter(xw, known, nxt, prev_var, prev_const, scaled, NumericEffectKind(kind)))
+                step = node.next[(w, kind, scaled)] = _Chain((self.m.or_of([known, xw], f"known {name}"), nxt))
+            node = step
+        return node.value
 
     def _state_test(self, test: Test, decs: set[int], name: str) -> Lit:
         """Literal for an achieve/context test evaluated after the chosen ``decs``."""
@@ -231,6 +258,7 @@ class Encoder:
     def _task_rules(self, t: int) -> None:
         tg = self.tg
         seen = self.scopes.seen_by_task(t)
+        writers_seen: dict[AtomKey, list[tuple[int, bool]]] = {}  # the decompositions share them
         for i, context in enumerate(tg.task(t).contexts):
             ok = self._state_test(context, seen, f"context({tg.vertices[t].content})")
             self.m.clause([neg(self.active[t]), ok], self._label(
@@ -247,7 +275,9 @@ class Encoder:
                 label = self._label(f"pre:{dec.id}:{c}", f"{dec.id}: precondition {_show(c)}")
                 if isinstance(c, Literal):
                     atom = (c.predicate, c.args)
-                    ok = self._bool_holds(atom, c.positive, self._bool_writers(atom, seen), f"pre({dec.id})")
+                    if atom not in writers_seen:
+                        writers_seen[atom] = self._bool_writers(atom, seen)
+                    ok = self._bool_holds(atom, c.positive, writers_seen[atom], f"pre({dec.id})")
                 else:
                     atom = (c.function, c.args)
                     ok = self._num_holds(atom, c.op, c.value, self._num_writers(atom, seen), f"pre({dec.id})")
@@ -280,8 +310,9 @@ class Encoder:
                         if self.tg.vertices[a].parent != self.tg.vertices[b].parent:
                             self.m.clause([neg(self.x[a]), neg(self.x[b])], label)
             else:
-                any_pos = self.m.or_of([self.x[a] for a in c.setting_true], f"anypos({atom})")
-                any_neg = self.m.or_of([self.x[b] for b in c.setting_false], f"anyneg({atom})")
+                fact = f"{atom[0]}({', '.join(atom[1])})"
+                any_pos = self.m.or_of([self.x[a] for a in c.setting_true], f"{fact} set below {v}")
+                any_neg = self.m.or_of([self.x[b] for b in c.setting_false], f"{fact} cleared below {v}")
                 self.m.clause([neg(any_pos), neg(any_neg)], label)
 
     def _achieve(self, v: int, goal: str, test: Test) -> None:
@@ -294,6 +325,14 @@ class Encoder:
             holds = self._state_test(part, decs, f"achieve({goal}@{v})")
             self.m.clause([neg(self.active[v]), holds],
                           self._label(f"achieve:{v}:{goal}:{i}", f"achieve condition of goal {goal}: {_show_test(part)}"))
+
+
+@dataclass
+class _Chain(Generic[V]):
+    """The value of an atom after a prefix of its writers, and the steps to longer prefixes."""
+
+    value: V  # (known, true) literals of a fact; (known literal, integer variable) of a number
+    next: dict[tuple[Any, ...], "_Chain[V]"] = field(default_factory=dict)
 
 
 def _conjuncts(test: Test) -> Iterable[Test]:

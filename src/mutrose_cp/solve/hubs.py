@@ -14,6 +14,10 @@ is enumerated on its own, and the count is rebuilt by conditioning on the hubs' 
 So the count is a sum over the hubs' values and their inclusion-exclusion subsets (4^hubs terms
 at most) of products over the blocks, each block summed over its solutions' values on the hub
 literals: linear in the number of tasks.  ``tests/test_hubs.py`` compares it with enumeration.
+
+The layered solver (:mod:`.layered`) is tried first: it writes such definitions as chains and
+solves the component block by block, listing and sampling it too; the hubs count the
+components it cannot cut into blocks with small frontiers.
 """
 from __future__ import annotations
 

@@ -3,8 +3,9 @@
 A decomposition's cost is additive: every action it executes costs its own amount (one by
 default) and every method it applies may add a cost.  An additive cost splits over the
 independent components of the decomposition space, so the optimum is each component's cheapest
-solution: read off the listed solutions where a component was listed, found by CP-SAT where it
-was too large to list.
+solution: read off the listed solutions where a component was listed, a shortest path through
+its layers where it was solved block by block (:mod:`.layered`), found by CP-SAT where it was
+too large to list.
 """
 from __future__ import annotations
 
@@ -77,7 +78,7 @@ class CostModel:
 def least_cost(space: DecompositionSpace, costs: Mapping[int, int]) -> tuple[list[int], int]:
     """A valid mission decomposition of least total cost (decomposition vertices in mission
     order) and its cost.  Ties are broken by the canonical order of a component's solutions
-    where the component was listed."""
+    where the component was listed, by the listing order of its layers where it was not."""
     if space.count == 0:
         raise NoDecompositionError("no valid mission decomposition exists")
     chosen = list(space.fixed)
@@ -89,14 +90,17 @@ def least_cost(space: DecompositionSpace, costs: Mapping[int, int]) -> tuple[lis
 
 def _cheapest(space: DecompositionSpace, component: Component, costs: Mapping[int, int]) -> list[int]:
     """The decomposition vertices of ``component``'s cheapest solution."""
-    from .proto import ProtoBuilder
-    from .run import INFEASIBLE, OPTIMAL, run_solver
-
     var_to_dec = space.var_to_dec
+    if component.solutions is None and component.layers is not None:
+        best_layered, _ = component.layers.least_cost({v: costs.get(var_to_dec[v], 0) for v in component.choice_vars})
+        return [var_to_dec[v] for v in best_layered]
     if component.solutions is not None:
         best = min(component.solutions,
                    key=lambda s: (sum(costs.get(var_to_dec[v], 0) for v in s), sorted(s)))
         return [var_to_dec[v] for v in best]
+    from .proto import ProtoBuilder  # the CP-SAT layer, loaded when a component needs it
+    from .run import INFEASIBLE, OPTIMAL, run_solver
+
     builder = ProtoBuilder(space.encoding.model)
     for r in component.records:
         builder.post(r)

@@ -32,7 +32,7 @@ from .boolean_model import (
 
 MAX_WORK = 4096  # assignments x records: beyond this CP-SAT is the faster way
 
-def _defined(r: Record) -> int | None:
+def defined_variable(r: Record) -> int | None:
     """The variable ``r`` defines, if it is a definition."""
     match r:
         case AndOf(target=target) | OrOf(target=target) | ValueAfter(target=target):
@@ -49,7 +49,7 @@ def free_variables(records: Sequence[Record]) -> list[int] | None:
     seen: set[int] = set()
     free: list[int] = []
     for r in records:
-        target = _defined(r)
+        target = defined_variable(r)
         for v in r.variables():
             if v == target:
                 continue
