@@ -315,3 +315,12 @@ def test_forall_condition_error_has_column_in_the_forall() -> None:
     assert error_of(parse_forall, text) == (
         f"Parse error in condition: {text}: column {len(text)}: expected an atom such as v.attr"
     )
+
+
+@pytest.mark.parametrize("op", [";", "#"])
+def test_a_long_chain_of_one_operator_is_one_flat_node(op: str) -> None:
+    """A sequence of thousands of goals (a generated mission) must not nest a node per operator:
+    transforming such a tree recursed once per goal and crashed past Python's recursion limit."""
+    names = [f"G{i}" for i in range(2, 5002)]
+    _, annotation = parse_node_text(f"G1: root [{op.join(names)}]")
+    assert annotation == AnnotationOp(op, tuple(AnnotationLeaf(n) for n in names))
