@@ -16,7 +16,6 @@ import json
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -24,6 +23,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from generate import REFERENCE, generate  # noqa: E402
+
+from mutrose_cp.measure import run_measured  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
@@ -69,36 +70,20 @@ DISSERTATION = {
 
 
 def measure(cmd: list[str], cwd: Path, timeout: float) -> dict:
-    """Run ``cmd`` as a child process; wall time, peak RSS (MB), exit status and summary."""
-    start = time.perf_counter()
-    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
-        proc = subprocess.Popen(cmd, cwd=cwd, stdout=out, stderr=err)
-        deadline = start + timeout
-        status, rusage = 0, None
-        while True:
-            pid, status, rusage = os.wait4(proc.pid, os.WNOHANG)
-            if pid:
-                break
-            if time.perf_counter() > deadline:
-                proc.kill()
-                _, status, rusage = os.wait4(proc.pid, 0)
-                return {"status": "timeout", "seconds": round(time.perf_counter() - start, 3),
-                        "peak_mb": round(rusage.ru_maxrss / 1024, 1)}
-            time.sleep(0.01)
-        wall = time.perf_counter() - start
-        proc.returncode = os.waitstatus_to_exitcode(status)
-        out.seek(0)
-        err.seek(0)
-        stdout, stderr = out.read().decode(), err.read().decode()
-    result = {"status": "ok" if proc.returncode == 0 else f"exit {proc.returncode}",
-              "seconds": round(wall, 3), "peak_mb": round(rusage.ru_maxrss / 1024, 1)}
-    lines = [l for l in stdout.splitlines() if l.startswith("{")]
+    """Run ``cmd`` as a child process (``mutrose_cp.measure``); wall time, peak RSS (MB), exit
+    status and the command's JSON summary."""
+    run = run_measured(cmd, cwd, timeout)
+    if run.timed_out:
+        return {"status": "timeout", "seconds": round(run.seconds, 3), "peak_mb": round(run.peak_mb, 1)}
+    result = {"status": "ok" if run.succeeded else f"exit {run.exit_status}",
+              "seconds": round(run.seconds, 3), "peak_mb": round(run.peak_mb, 1)}
+    lines = [l for l in run.stdout.splitlines() if l.startswith("{")]
     if lines:
         summary = json.loads(lines[-1])
         result.update(task_instances=summary.get("task_instances"), constraints=summary.get("constraints"),
                       mission_decompositions=summary.get("mission_decompositions"))
-    elif proc.returncode != 0:
-        result["error"] = stderr.strip().splitlines()[-1:] if stderr.strip() else []
+    elif not run.succeeded:
+        result["error"] = run.stderr.strip().splitlines()[-1:] if run.stderr.strip() else []
     return result
 
 

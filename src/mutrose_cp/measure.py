@@ -1,0 +1,113 @@
+"""Run a command as a child process and measure it: wall time, peak memory, exit status.
+
+The parent does the measuring (``os.wait4`` returns the child's peak resident set size), so the
+numbers cover the whole process, interpreter start-up included, and the child need not
+cooperate.  The benchmarks and ``batch`` measure commands this way.
+
+The child runs in a session of its own, hence its own process group: at the time limit the whole
+group is killed, so no helper process it started outlives it.  A Ctrl-C at the terminal reaches
+only the parent (the child is not in the terminal's foreground group); the parent's interrupt
+then kills the group on its way out, so an interrupted parent leaves no child running either.
+A parent that waits for several children in threads stops them through ``cancel``: the signal
+reaches the main thread only, the event reaches every waiting thread.
+"""
+from __future__ import annotations
+
+import os
+import resource
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Mapping, Sequence
+
+POLL_SECONDS = 0.01  # how often the parent looks whether the child has ended
+
+
+class Cancelled(Exception):
+    """The run was stopped through its ``cancel`` event; the child was killed, nothing measured."""
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """How one run of a command went.  ``exit_status`` is None when the run was killed at the
+    time limit; it is negative (``-signal``) when a signal ended the child."""
+
+    timed_out: bool
+    exit_status: int | None
+    seconds: float
+    peak_mb: float
+    stdout: str
+    stderr: str
+
+    @property
+    def succeeded(self) -> bool:
+        return self.exit_status == 0
+
+
+def _peak_mb(usage: resource.struct_rusage) -> float:
+    """``ru_maxrss`` in megabytes: Linux counts kilobytes, macOS bytes."""
+    return usage.ru_maxrss / (1024 * 1024 if sys.platform == "darwin" else 1024)
+
+
+def _kill_group(pid: int) -> None:
+    try:
+        os.killpg(pid, signal.SIGKILL)
+    except ProcessLookupError:  # the group is already gone
+        pass
+
+
+def _wait(pid: int, deadline: float, cancel: threading.Event | None) -> tuple[int, resource.struct_rusage] | None:
+    """The child's wait status and resource usage once it ends; None at the deadline."""
+    while True:
+        done, status, usage = os.wait4(pid, os.WNOHANG)
+        if done:
+            return status, usage
+        if cancel is not None and cancel.is_set():
+            raise Cancelled()
+        remaining = deadline - time.perf_counter()
+        if remaining <= 0:
+            return None
+        time.sleep(min(POLL_SECONDS, remaining))
+
+
+def _text(stream: IO[bytes]) -> str:
+    stream.seek(0)
+    return stream.read().decode("utf-8", errors="replace")
+
+
+def run_measured(command: Sequence[str], cwd: str | os.PathLike[str], time_limit: float,
+                 env: Mapping[str, str] | None = None, cancel: threading.Event | None = None,
+                 pass_fds: Sequence[int] = ()) -> Measurement:
+    """Run ``command`` in ``cwd`` with at most ``time_limit`` seconds of wall time.
+
+    Standard output and error are collected in temporary files (a pipe could fill up and stall
+    the child), standard input is empty; ``pass_fds`` are left open in the child.  Setting
+    ``cancel`` kills the child and raises :class:`Cancelled`.
+
+    The peak memory is the kernel's: the largest resident set the child had, counting the
+    parent's own when it was started (``fork`` copies it), so it is exact for a small parent
+    only."""
+    start = time.perf_counter()
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        child = subprocess.Popen(list(command), cwd=Path(cwd), stdin=subprocess.DEVNULL, stdout=out, stderr=err,
+                                 env=None if env is None else dict(env), start_new_session=True,
+                                 pass_fds=tuple(pass_fds))
+        ended = None
+        try:
+            ended = _wait(child.pid, start + time_limit, cancel)
+        finally:
+            if ended is None:  # the time limit, a cancel, or the parent was interrupted: end the whole group
+                _kill_group(child.pid)
+                _, status, usage = os.wait4(child.pid, 0)
+                child.returncode = os.waitstatus_to_exitcode(status)
+        seconds = time.perf_counter() - start
+        if ended is not None:
+            status, usage = ended
+            child.returncode = os.waitstatus_to_exitcode(status)
+        return Measurement(timed_out=ended is None, exit_status=None if ended is None else child.returncode,
+                           seconds=seconds, peak_mb=_peak_mb(usage), stdout=_text(out), stderr=_text(err))
