@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Sequence
 
 from . import __version__
+from .batch.command import add_batch_parser
 from .errors import MissionError
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
@@ -414,6 +415,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--index", type=int, default=0, help="decomposition view: which valid decomposition (0-based)")
     p.add_argument("-o", "--output", required=True, help="FILE.svg, FILE.png (needs graphviz) or FILE.dot")
     p.set_defaults(func=cmd_graph)
+
+    add_batch_parser(sub)
     return parser
 
 
