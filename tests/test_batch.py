@@ -285,3 +285,22 @@ def test_progress_bar_counts_jobs_and_failures_on_a_terminal_only():
     redirected = io.StringIO()
     Progress(total=2, skipped=0, enabled=True, stream=redirected).finished("ok")
     assert redirected.getvalue() == ""
+
+
+def test_the_dissertation_experiment_is_one_valid_manifest(tmp_path, reference):
+    """``ladder_manifest.py dissertation``: both algorithms on every configuration of the
+    scalability folders, every job accepted by the command line's parser."""
+    from ladder_manifest import main as write_manifest_of
+
+    from mutrose_cp.batch.manifest import check_jobs, read_manifest
+
+    assert write_manifest_of(["dissertation", str(tmp_path)]) == 0
+    jobs = read_manifest(tmp_path / "dissertation.json")
+    from run import DISSERTATION
+
+    configurations = sum(1 for folder, template, _gm, sizes in DISSERTATION.values() for i in range(len(sizes))
+                         if (reference / folder / "configuration" / template.format(i=i)).exists())
+    assert configurations == 34  # Table 5.2: 8 delivery, 13 pickup and 13 vital-signs worlds
+    assert len(jobs) == 2 * configurations
+    assert len(check_jobs(jobs, tmp_path)) == len(jobs)
+    assert {job.options[-1] for job in jobs} == {"exploratory", "--lenient-xml"}
