@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -127,3 +128,16 @@ def test_alone_local_pool_and_ray_write_the_same_bytes(tmp_path):
     assert _settled(folders["ray"]) == _settled(folders["pool"])
     statuses = {line[0]: line[1] for line in _settled(folders["pool"])}
     assert all(statuses[job["id"]] == "ok" for job in ladder)
+
+
+@pytest.mark.ray
+def test_an_address_where_no_cluster_answers_is_refused_at_once(tmp_path):
+    _ray_or_skip()
+    with socket.socket() as free:  # a port nothing listens on
+        free.bind(("127.0.0.1", 0))
+        port = free.getsockname()[1]
+    (tmp_path / "m.json").write_text(json.dumps([{"command": "count", "inputs": [str(ROOT / "examples" / "item-delivery")]}]))
+    run = _batch(tmp_path, "--ray", f"127.0.0.1:{port}")
+    assert run.returncode == 2
+    assert f"error: --ray: nothing answers at 127.0.0.1:{port}" in run.stderr
+    assert not (tmp_path / "m.results.jsonl").exists()

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import signal
+import socket
 import threading
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from contextlib import contextmanager
@@ -31,6 +32,7 @@ from .job import JobSpec, Outcome, run_job
 
 Report = Callable[[int, Outcome], None]
 RAY_INSTALL = "pip install 'mutrose-cp[ray]'"
+CONNECT_SECONDS = 5.0  # how long a cluster's address may take to answer
 WAIT_SECONDS = 0.2  # how long the Ray driver waits for a finished job before it looks for an interrupt
 
 
@@ -83,14 +85,12 @@ class RayCluster:
 
     def run(self, specs: Sequence[tuple[int, JobSpec]], report: Report) -> None:
         ray = self.ray
-        local = self.address is None
-        with _signals_noted() as noted:
-            ray.init(address="local" if local else self.address, num_cpus=self.cpus if local else None,
-                     include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
-            noted.install()  # Ray's native crash handler took SIGTERM over
-            try:
+        try:
+            self._start()  # an interrupt here is raised as usual: no job has started
+            with _signals_noted() as noted:
                 cpus = int(ray.cluster_resources().get("CPU", 0))
-                self._described = f"Ray ({'a local cluster' if local else self.address}, {cpus} CPUs)"
+                where = "a local cluster" if self.address is None else self.address
+                self._described = f"Ray ({where}, {cpus} CPUs)"
                 remote = ray.remote(num_cpus=1)(run_job)
                 pending = {remote.remote(spec): key for key, spec in specs}
                 try:
@@ -102,8 +102,22 @@ class RayCluster:
                 except BaseException:
                     self._cancel(list(pending))
                     raise
-            finally:
-                ray.shutdown()  # stops a local cluster; leaves a joined one running
+        finally:
+            ray.shutdown()  # stops a local cluster; leaves a joined one running
+
+    def _start(self) -> None:
+        """Start the local cluster, or join the one at ``address``; a cluster that cannot be
+        joined is a usage error (exit 2), not a traceback."""
+        local = self.address is None
+        if self.address is not None:
+            _answers(self.address)
+        try:
+            self.ray.init(address="local" if local else self.address, num_cpus=self.cpus if local else None,
+                          include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
+        except (ConnectionError, ValueError, RuntimeError) as err:
+            where = "start a local Ray cluster" if local else f"join the Ray cluster at {self.address}"
+            raise MissionError(f"cannot {where}: {err} (a cluster with token authentication needs its token on "
+                               "this machine too: ~/.ray/auth_token or RAY_AUTH_TOKEN)", "--ray") from None
 
     def _cancel(self, refs: list[Any]) -> None:
         """Stop the unfinished tasks: a running one gets a KeyboardInterrupt, on which
@@ -112,6 +126,19 @@ class RayCluster:
             self.ray.cancel(ref)
         if refs:
             self.ray.wait(refs, num_returns=len(refs), timeout=10)
+
+
+def _answers(address: str) -> None:
+    """Refuse at once a ``HOST:PORT`` where nothing listens: Ray itself retries for minutes,
+    deaf to Ctrl-C meanwhile.  (``auto`` is looked up by Ray.)"""
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host, int(port)), timeout=CONNECT_SECONDS).close()
+    except OSError as err:
+        raise MissionError(f"nothing answers at {address} ({err.strerror or err}): start the cluster with "
+                           "ray start --head, or check the address", "--ray") from None
 
 
 class _NotedSignals:
@@ -143,6 +170,8 @@ def _signals_noted() -> Iterator[_NotedSignals]:
         yield _NotedSignals()
         return
     previous = {signum: signal.getsignal(signum) for signum in _NotedSignals.SIGNALS}
+    if previous[signal.SIGTERM] is None:  # set outside Python: Ray's native crash handler took SIGTERM over
+        previous[signal.SIGTERM] = signal.SIG_DFL
     noted = _NotedSignals()
     noted.install()
     try:
