@@ -101,19 +101,12 @@ def cmd_batch(args: argparse.Namespace) -> int:
     from ..interrupt import Interrupted, phase, signals_held
     from .engines import LocalPool, RayCluster
     from .job import OK, JobSpec
-    from .manifest import check_jobs, jobs_from_glob, read_manifest
+    from .manifest import check_jobs
     from .report import Progress, summary_table
     from .results import InputHasher, ResultLine, ResultsFile
 
     _complete(args)
-    if args.each is not None:
-        jobs, base = jobs_from_glob(args.each, args.target[0], args.target[1:], mission=args.mission,
-                                    output=args.output), Path.cwd()
-        results_path = Path(args.results or "batch.results.jsonl")
-    else:
-        manifest = Path(args.target[0])
-        jobs, base = read_manifest(manifest), manifest.resolve().parent
-        results_path = Path(args.results) if args.results else manifest.with_suffix(".results.jsonl")
+    jobs, base, results_path = _jobs(args)
     engine = RayCluster(args.ray or None, args.jobs) if args.ray is not None else LocalPool(args.jobs)
     parsed = check_jobs(jobs, base)
     hashes = _hashes(jobs, parsed, InputHasher(base))
@@ -156,6 +149,19 @@ def cmd_batch(args: argparse.Namespace) -> int:
     if any(line is None for line in lines):
         raise MissionError("some jobs have no result", str(results_path))
     return 0 if all(line is not None and line.status == OK for line in lines) else 1
+
+
+def _jobs(args: argparse.Namespace) -> tuple[list[Job], Path, Path]:
+    """The jobs, the folder they run in, and the results file: from the manifest (its folder, and
+    ``MANIFEST.results.jsonl`` beside it), or from ``--each`` (the current folder)."""
+    from .manifest import jobs_from_glob, read_manifest
+
+    if args.each is not None:
+        jobs = jobs_from_glob(args.each, args.target[0], args.target[1:], mission=args.mission, output=args.output)
+        return jobs, Path.cwd(), Path(args.results or "batch.results.jsonl")
+    manifest = Path(args.target[0])
+    results = Path(args.results) if args.results else manifest.with_suffix(".results.jsonl")
+    return read_manifest(manifest), manifest.resolve().parent, results
 
 
 def _hashes(jobs: list[Job], parsed: list[argparse.Namespace], hasher: InputHasher) -> list[str]:
