@@ -116,3 +116,18 @@ def test_graph_writes_dot(tmp_path, capsys):
 def test_usage_errors_are_clean(capsys, args):
     code, _, err = _run(capsys, *args)
     assert code == 2 and "error:" in err and "Traceback" not in err
+
+
+def test_world_option_reads_another_world(tmp_path, capsys):
+    """``--world FILE`` replaces the configuration's world_db.path (the mission folder is left
+    as it is): here a world where the fourth delivery is pending too."""
+    world = tmp_path / "four-deliveries.xml"
+    original = (DELIVERY / "knowledge" / "world_db.xml").read_text()
+    world.write_text(original.replace("<is_collected>True</is_collected>\n        <is_delivered>True</is_delivered>",
+                                      "<is_collected>False</is_collected>\n        <is_delivered>False</is_delivered>"))
+    assert _run(capsys, "count", str(DELIVERY), "-q")[1].strip() == "8"
+    code, out, _ = _run(capsys, "count", str(DELIVERY), "--world", str(world), "-q", "--json-summary")
+    summary = json.loads(out.splitlines()[0])
+    assert code == 0 and summary["mission_decompositions"] == "16" and summary["inputs"]["world"] == str(world)
+    code, _, err = _run(capsys, "check", str(DELIVERY), "--world", str(tmp_path / "missing.xml"))
+    assert code == 2 and f"{tmp_path / 'missing.xml'}: cannot read world knowledge file" in err

@@ -1,25 +1,62 @@
-"""``run_measured``: a child process's exit status, output, wall time and peak memory, and its
-whole process group killed at the time limit (the group part is in test_compare.py)."""
+"""Measured child processes (``mutrose_cp.measure``): output, exit status, time limit and cancel
+end the child's whole process group."""
 from __future__ import annotations
 
 import sys
+import threading
+import time
+from pathlib import Path
 
-from mutrose_cp.measure import run_measured
+import pytest
 
+from mutrose_cp.measure import Cancelled, run_measured
 
-def test_a_finished_child_gives_its_status_output_and_memory(tmp_path):
-    code = "import sys; data = bytearray(64 * 2**20); print('out'); print('err', file=sys.stderr); sys.exit(3)"
-    run = run_measured([sys.executable, "-c", code], tmp_path, 60)
-    assert not run.timed_out and run.exit_status == 3 and not run.succeeded
-    assert run.stdout == "out\n" and run.stderr == "err\n"
-    assert run.peak_mb >= 64  # the 64 MB buffer is in the peak
-
-
-def test_a_child_ended_by_a_signal_has_a_negative_status(tmp_path):
-    run = run_measured([sys.executable, "-c", "import os; os.abort()"], tmp_path, 60)
-    assert run.exit_status == -6 and not run.timed_out
+# a child that starts a grandchild in its process group, prints the group id, then waits
+FAMILY = [sys.executable, "-c", "import os, subprocess, sys, time; subprocess.Popen(['sleep', '60']); "
+          "print(os.getpgid(0), flush=True); time.sleep(60)"]
 
 
-def test_a_child_over_the_time_limit_is_killed(tmp_path):
-    run = run_measured([sys.executable, "-c", "import time; time.sleep(60)"], tmp_path, 1)
+def _running(pgid: int) -> bool:
+    """Whether a process of the group runs (a killed one may stay a zombie for a while)."""
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":  # process group, state
+            return True
+    return False
+
+
+def _group_alive(pgid: int) -> bool:
+    """Whether the group still runs once the SIGKILL sent to it had time to arrive."""
+    for _ in range(100):
+        if not _running(pgid):
+            return False
+        time.sleep(0.05)
+    return True
+
+
+def test_output_and_exit_status_are_collected(tmp_path):
+    run = run_measured([sys.executable, "-c", "import sys; print('out'); print('err', file=sys.stderr); sys.exit(3)"],
+                       tmp_path, 60)
+    assert (run.stdout, run.stderr, run.exit_status, run.timed_out) == ("out\n", "err\n", 3, False)
+    assert run.peak_mb > 0 and not run.succeeded
+
+
+def test_the_time_limit_kills_the_whole_group(tmp_path):
+    run = run_measured(FAMILY, tmp_path, 1.0)
     assert run.timed_out and run.exit_status is None
+    assert not _group_alive(int(run.stdout.split()[0]))  # the grandchild went with it
+
+
+def test_cancel_kills_the_group_and_measures_nothing(tmp_path):
+    cancel = threading.Event()
+    timer = threading.Timer(1.0, cancel.set)
+    timer.start()
+    out = tmp_path / "pgid"
+    command = [*FAMILY[:2], FAMILY[2].replace("print(os.getpgid(0), flush=True)",
+                                              f"open({str(out)!r}, 'w').write(str(os.getpgid(0)))")]
+    with pytest.raises(Cancelled):
+        run_measured(command, tmp_path, 60, cancel=cancel)
+    assert not _group_alive(int(out.read_text()))

@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import subprocess
+import sys
 import tracemalloc
 from pathlib import Path
 
@@ -128,3 +130,13 @@ def test_a_goal_model_too_deep_names_the_goal(tmp_path, capsys, monkeypatch):
     folder = _chain(tmp_path / "deep", 60)
     assert main(["check", str(folder)]) == 2
     assert ": goal G2050: the goal model is nested more than 50 levels deep here" in capsys.readouterr().err
+
+
+def test_inputs_are_read_under_a_memory_limit_far_below_the_input_limit():
+    """Reading a small file reserves a buffer of its size, not of the input limit (256 MB): a
+    mission is checked in a process whose data may not exceed 120 MB."""
+    code = ("import resource, sys; resource.setrlimit(resource.RLIMIT_DATA, (120 << 20, 120 << 20)); "
+            "from mutrose_cp.cli import main; sys.exit(main(sys.argv[1:]))")
+    run = subprocess.run([sys.executable, "-c", code, "check", str(EXAMPLE), "-q"], capture_output=True, text=True,
+                         timeout=120)
+    assert run.returncode == 0, run.stderr

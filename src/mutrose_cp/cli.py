@@ -18,11 +18,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
 from . import __version__
+from .batch.command import add_batch_parser
 from .errors import MissionError, Problem
 from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
-from .mission import Mission, find_mission_files
+from .mission import Mission, find_mission_files, world_file
 from .process import command_settings, exit_process, usable_stderr
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
@@ -520,6 +521,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--lenient-xml", action="store_true",
                        help="read XML whose repair changes which records exist or how they nest, as the original "
                             "does (with warnings) instead of refusing it")
+        p.add_argument("--world", metavar="FILE",
+                       help="read the world knowledge from FILE instead of the configuration's world_db.path")
         p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
                        help="refuse input files larger than this (default 256)")
         p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
@@ -632,6 +635,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="refuse input files larger than this (default 256)")
     p.add_argument("-q", "--quiet", action="store_true", help="no warnings and no summary on stderr")
     p.set_defaults(func=cmd_export_hddl)
+
+    add_batch_parser(sub)
     return parser
 
 
@@ -667,7 +672,7 @@ def _main(argv: Sequence[str] | None) -> int:
         parser.print_help(sys.stderr)
         return 2
     try:
-        with signal_handlers(), input_limit(args.max_input_mb * MB):
+        with signal_handlers(), input_limit(args.max_input_mb * MB), world_file(getattr(args, "world", None)):
             status: int = args.func(args)
             return status
     except (Interrupted, MissionError, RecursionError, OSError) as err:

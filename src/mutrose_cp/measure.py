@@ -2,12 +2,14 @@
 
 The parent does the measuring (``os.wait4`` returns the child's peak resident set size), so the
 numbers cover the whole process, interpreter start-up included, and the child need not
-cooperate.  ``compare`` and the benchmarks measure the decomposers this way.
+cooperate.  ``compare``, ``batch`` and the benchmarks measure commands this way.
 
 The child runs in a session of its own, hence its own process group: at the time limit the whole
 group is killed, so no helper process it started outlives it.  A Ctrl-C at the terminal reaches
 only the parent (the child is not in the terminal's foreground group); the parent's interrupt
 then kills the group on its way out, so an interrupted parent leaves no child running either.
+A parent that waits for several children in threads stops them through ``cancel``: the signal
+reaches the main thread only, the event reaches every waiting thread.
 """
 from __future__ import annotations
 
@@ -17,12 +19,17 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Mapping, Sequence
 
 POLL_SECONDS = 0.01  # how often the parent looks whether the child has ended
+
+
+class Cancelled(Exception):
+    """The run was stopped through its ``cancel`` event; the child was killed, nothing measured."""
 
 
 @dataclass(frozen=True)
@@ -54,12 +61,14 @@ def _kill_group(pid: int) -> None:
         pass
 
 
-def _wait(pid: int, deadline: float) -> tuple[int, resource.struct_rusage] | None:
+def _wait(pid: int, deadline: float, cancel: threading.Event | None) -> tuple[int, resource.struct_rusage] | None:
     """The child's wait status and resource usage once it ends; None at the deadline."""
     while True:
         done, status, usage = os.wait4(pid, os.WNOHANG)
         if done:
             return status, usage
+        if cancel is not None and cancel.is_set():
+            raise Cancelled()
         remaining = deadline - time.perf_counter()
         if remaining <= 0:
             return None
@@ -72,20 +81,27 @@ def _text(stream: IO[bytes]) -> str:
 
 
 def run_measured(command: Sequence[str], cwd: str | os.PathLike[str], time_limit: float,
-                 env: Mapping[str, str] | None = None) -> Measurement:
+                 env: Mapping[str, str] | None = None, cancel: threading.Event | None = None,
+                 pass_fds: Sequence[int] = ()) -> Measurement:
     """Run ``command`` in ``cwd`` with at most ``time_limit`` seconds of wall time.
 
     Standard output and error are collected in temporary files (a pipe could fill up and stall
-    the child), standard input is empty."""
+    the child), standard input is empty; ``pass_fds`` are left open in the child.  Setting
+    ``cancel`` kills the child and raises :class:`Cancelled`.
+
+    The peak memory is the kernel's: the largest resident set the child had, counting the
+    parent's own when it was started (``fork`` copies it), so it is exact for a small parent
+    only."""
     start = time.perf_counter()
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
         child = subprocess.Popen(list(command), cwd=Path(cwd), stdin=subprocess.DEVNULL, stdout=out, stderr=err,
-                                 env=None if env is None else dict(env), start_new_session=True)
+                                 env=None if env is None else dict(env), start_new_session=True,
+                                 pass_fds=tuple(pass_fds))
         ended = None
         try:
-            ended = _wait(child.pid, start + time_limit)
+            ended = _wait(child.pid, start + time_limit, cancel)
         finally:
-            if ended is None:  # the time limit, or the parent was interrupted: end the whole group
+            if ended is None:  # the time limit, a cancel, or the parent was interrupted: end the whole group
                 _kill_group(child.pid)
                 _, status, usage = os.wait4(child.pid, 0)
                 child.returncode = os.waitstatus_to_exitcode(status)

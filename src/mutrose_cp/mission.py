@@ -9,10 +9,12 @@ from __future__ import annotations
 import functools
 import os
 import sys
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, TypeVar
+from typing import TYPE_CHECKING, Any, Callable, Iterator, TypeVar
 
 from .constraints import Constraint, generate_constraints
 from .errors import MissionError, Problem
@@ -35,6 +37,20 @@ if TYPE_CHECKING:  # the solvers import OR-Tools, which takes a while: loaded wh
     from .solve.decompose import DecompositionRequest, DecompositionResult
     from .solve.embedding import DecompositionModel
     from .solve.encoding import Encoding
+
+
+_world_file: ContextVar[Path | None] = ContextVar("world_file", default=None)
+
+
+@contextmanager
+def world_file(path: str | os.PathLike[str] | None) -> Iterator[None]:
+    """Read the world knowledge from ``path`` instead of the configuration's ``world_db.path``
+    in every :meth:`Mission.load` while the block runs (``--world``: one mission, many worlds)."""
+    token = _world_file.set(None if path is None else Path(path))
+    try:
+        yield
+    finally:
+        _world_file.reset(token)
 
 
 def _world_ambiguity(relative: str, config_path: Path, read: Path) -> str:
@@ -157,8 +173,9 @@ class Mission:
 
     @classmethod
     def load(cls, hddl: str | os.PathLike[str], gm: str | os.PathLike[str], config: str | os.PathLike[str], *,
-             lenient_xml: bool = False) -> "Mission":
-        """Read and validate the four inputs (the world file is named by the configuration).
+             lenient_xml: bool = False, world: str | os.PathLike[str] | None = None) -> "Mission":
+        """Read and validate the four inputs (the world file is named by the configuration, unless
+        ``world`` or :func:`world_file` names another one).
 
         All problems of the three named files are collected before raising, so one run reports
         everything that is wrong."""
@@ -178,8 +195,9 @@ class Mission:
         cfg = attempt(lambda: load_configuration(config, lenient=lenient_xml))
         if problems or domain is None or goal_model is None or cfg is None:
             raise MissionError(problems)
-        world_path = resolve_config_path(cfg.world_db.path, Path(config))
-        ambiguity = _world_ambiguity(cfg.world_db.path, Path(config), world_path)
+        chosen = Path(world) if world is not None else _world_file.get()
+        world_path = chosen if chosen is not None else resolve_config_path(cfg.world_db.path, Path(config))
+        ambiguity = "" if chosen is not None else _world_ambiguity(cfg.world_db.path, Path(config), world_path)
         knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id, lenient=lenient_xml)
         mission = cls(domain, goal_model, cfg, knowledge, Path(config), world_path=world_path)
         mission.warnings.extend(cfg.warnings)

@@ -50,8 +50,12 @@ def read_bytes(path: str | os.PathLike[str], what: str, hint: str = "") -> bytes
             raise MissionError(Problem(source, f"the {what} file is {info.st_size / MB:.1f} MB, over the input limit "
                                                f"of {limit / MB:g} MB", "Raise it with --max-input-mb if the file is "
                                                "really that large."))
-        data = fh.read(limit + 1)
-    if len(data) > limit:  # the file grew while it was read
+        # a buffer the size of the file, not of the limit: under a memory limit (``batch
+        # --memory-mb``) a 256 MB buffer for a 2 kB file would fail
+        data = fh.read(info.st_size + 1)
+        if len(data) > info.st_size:  # the file grew while it was read: read on up to the limit
+            data += fh.read(limit + 1 - len(data))
+    if len(data) > limit:
         raise MissionError(Problem(source, f"the {what} file is over the input limit of {limit / MB:g} MB"))
     return data
 
