@@ -30,8 +30,8 @@ FACTS = ("lit", "warm", "loud", "open", "wet", "cold", "dark", "busy", "clean", 
 SWITCHES = 20
 
 
-def _coupled_mission(folder: Path) -> Path:
-    """20 parallel switches, each turning its own half of 16 room facts on, off or leaving them:
+def _coupled_mission(folder: Path, switches: int = SWITCHES) -> Path:
+    """20 parallel switches (by default), each turning its own half of 16 room facts on, off or leaving them:
     one component of about two million solutions (no switch may turn on a fact that another
     turns off), which takes CP-SAT many seconds to enumerate.  Neither faster way applies: the
     facts each switch touches differ, so what the switches so far have set and cleared takes
@@ -39,7 +39,7 @@ def _coupled_mission(folder: Path) -> Path:
     definitions are more than counting from them takes on (``solve/hubs.py``)."""
     actions = [Action("wait-here")]
     tasks = []
-    for k in range(SWITCHES):
+    for k in range(switches):
         name = "Switch" + "".join(chr(ord("A") + int(d)) for d in f"{k:02d}")  # letters only: SwitchAA, ...
         touched = random.Random(k).sample(FACTS, len(FACTS) // 2)
         on, off = f"switch-on-{k}", f"switch-off-{k}"

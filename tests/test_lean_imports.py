@@ -45,7 +45,8 @@ def test_commands_on_a_reference_mission_load_no_heavy_module(tmp_path, command)
 def test_a_component_too_large_to_enumerate_loads_only_the_lean_cp_sat_helper(tmp_path):
     from test_interrupts import _coupled_mission
 
-    mission = _coupled_mission(tmp_path / "coupled")  # one component of two million solutions
+    # ten switches: a component the faster ways cannot take on either, of thousands of solutions
+    mission = _coupled_mission(tmp_path / "coupled", switches=10)
     status, modules = _loaded(["count", str(mission), "-q"], tmp_path)
     assert status == 0
     assert "ortools" in modules and not modules & set(HEAVY)
