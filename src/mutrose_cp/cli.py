@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import shutil
 import signal
 import sys
@@ -23,6 +22,7 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
+from .output_file import refuse_unsafe_outputs
 from .process import command_settings, exit_process, usable_stderr
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
@@ -166,8 +166,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     _check_fleet(mission, fleet)
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     schedule_path = Path(args.schedule) if args.schedule else out_path.with_name("schedule.json")
-    for path in (out_path, schedule_path, *([Path(args.gantt)] if args.gantt else [])):
-        _refuse_inputs_as_output(path, mission, (hddl, gm, cfg, Path(args.fleet)))
+    _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
     options = AllocationOptions(objective, args.time_limit, args.workers, args.seed)
     progress = _AllocationProgress(not args.quiet, objective.name)
     try:
@@ -324,7 +323,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     if args.json_style == "standard" and file_type != "json":
         raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
                            "drop --json-style or write JSON (--format json)")
-    _refuse_inputs_as_output(out_path if not args.ihtn else None, mission, (hddl, gm, cfg))
+    _refuse_inputs_as_output((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg))
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
                         space=section)
     if args.ihtn:
@@ -405,24 +404,11 @@ def _warn(args: argparse.Namespace, mission: Mission) -> None:
             print(f"warning: {w}", file=sys.stderr)
 
 
-def _refuse_inputs_as_output(out_path: Path | None, mission: Mission, inputs: tuple[Path, ...]) -> None:
-    """An output that is one of the mission's inputs (the same file, after links, by device and
-    inode) would destroy it: refuse before anything is computed or written."""
-    if out_path is None or str(out_path) == "-":
-        return
-    try:
-        target = os.stat(out_path)
-    except OSError:
-        return  # a new file cannot be an input
-    world = mission.world_path
-    for path in (*inputs, *([world] if world is not None else [])):
-        try:
-            st = os.stat(path)
-        except OSError:
-            continue
-        if (st.st_dev, st.st_ino) == (target.st_dev, target.st_ino):
-            raise MissionError(f"the output would overwrite the input {path}: choose another output file",
-                               str(out_path))
+def _refuse_inputs_as_output(outputs: Sequence[Path | str | None], mission: Mission,
+                             inputs: tuple[Path, ...]) -> None:
+    """Outputs that are inputs of the mission (the world included) or one another, or folders:
+    refused before anything is computed or written (``output_file.refuse_unsafe_outputs``)."""
+    refuse_unsafe_outputs(outputs, (*inputs, mission.world_path))
 
 
 def cmd_count(args: argparse.Namespace) -> int:
@@ -455,6 +441,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = _inputs(args)
     if args.plot:
         plot_format(args.plot)  # before anything runs
+        refuse_unsafe_outputs((args.plot,), (hddl, gm, cfg))
     original = None
     if args.original:
         found = shutil.which(args.original)

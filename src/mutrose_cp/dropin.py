@@ -38,6 +38,7 @@ from .errors import MissionError
 from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
+from .output_file import refuse_unsafe_outputs
 from .process import command_settings, exit_process, usable_stderr
 from .solve.decompose import Algorithm, DecompositionRequest
 
@@ -127,6 +128,8 @@ def run(inv: Invocation, out: IO[str] | None = None) -> int:
     mission = Mission.load(hddl, gm, cfg, lenient_xml=True)  # the original repairs XML silently
     for warning in (*mission.warnings, *mission.initial_state.warnings):
         print(f"warning: {warning}", file=sys.stderr)
+    # the original would overwrite an input named as its output: refused, before any work
+    refuse_unsafe_outputs((None if inv.ihtn else mission.output_path(),), (*inv.files, mission.world_path))
     with phase("expanding the mission"):
         tg, constraints = mission.task_graph, mission.constraints
     if inv.verbose:

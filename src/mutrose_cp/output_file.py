@@ -7,6 +7,9 @@
 * A character device or a FIFO (``/dev/null``, a named pipe) is written through, never replaced.
 * ``-`` is standard output.
 * Every error names the path the user gave, never the temporary one.
+
+:func:`refuse_unsafe_outputs` checks a command's outputs before it does any work: an output that
+is one of its inputs, two outputs that are one file, an output that is a folder.
 """
 from __future__ import annotations
 
@@ -16,7 +19,7 @@ import sys
 import tempfile
 from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
-from typing import IO, Any, Iterator, Literal, overload
+from typing import IO, Any, Iterable, Iterator, Literal, overload
 
 from .errors import MissionError
 
@@ -131,3 +134,40 @@ def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
         if isinstance(exc, OSError):
             raise _failure(path, exc) from None
         raise
+
+
+Pathlike = str | os.PathLike[str]
+
+
+def _identity(path: Pathlike) -> tuple[object, ...]:
+    """What makes two paths one file: its device and inode when it exists (links, hard links),
+    else the path with every link of its folders resolved."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return ("new", os.path.realpath(path))
+    return ("file", st.st_dev, st.st_ino)
+
+
+def refuse_unsafe_outputs(outputs: Iterable[Pathlike | None], inputs: Iterable[Pathlike | None]) -> None:
+    """Refuse, before any work, the outputs that would destroy or lose something, each located at
+    the output as the user gave it: one that is an input (it would be overwritten), one that is
+    the same file as an earlier output (the later one would replace it) and one that is a
+    folder.  ``None`` and ``-`` (standard output) are skipped."""
+    read: dict[tuple[object, ...], Pathlike] = {}
+    for path in inputs:
+        if path is not None and os.fspath(path) != STDOUT and os.path.exists(path):
+            read.setdefault(_identity(path), path)
+    written: dict[tuple[object, ...], Pathlike] = {}
+    for path in outputs:
+        if path is None or os.fspath(path) == STDOUT:
+            continue
+        _existing(Path(os.path.realpath(path)), path)  # a folder is refused
+        identity = _identity(path)
+        if identity in read:
+            raise MissionError(f"the output would overwrite the input {os.fspath(read[identity])}: choose another "
+                               "output file", os.fspath(path))
+        if identity in written:
+            raise MissionError(f"the outputs {os.fspath(written[identity])} and {os.fspath(path)} are one file, "
+                               "which the later would replace: give each output a file of its own", os.fspath(path))
+        written[identity] = path

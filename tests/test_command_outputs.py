@@ -1,0 +1,123 @@
+"""The outputs of ``allocate``, ``export-hddl``, ``compare --plot`` and the ``mutrose`` drop-in
+are checked before any work: an output that is an input, two outputs that are one file, an
+output that is a folder are refused (exit 2, located at the output), and nothing is written.
+A command that writes several files makes them all before writing the first, so a refusal
+found late leaves none of them behind."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import require_reference
+from mutrose_cp.cli import main
+from mutrose_cp.errors import MissionError
+from mutrose_cp.output_file import refuse_unsafe_outputs
+
+ROOT = Path(__file__).resolve().parent.parent
+DELIVERY = ROOT / "examples" / "item-delivery"
+HOSPITAL = ROOT / "examples" / "hospital-disinfection"
+
+
+# ----------------------------------------------------------------------------------------------
+# the rule
+
+
+def test_an_input_a_repeated_output_and_a_folder_are_refused(tmp_path: Path):
+    source, out = tmp_path / "in.json", tmp_path / "out.json"
+    source.write_text("{}")
+    link = tmp_path / "link.json"
+    link.symlink_to(source)
+    with pytest.raises(MissionError, match="would overwrite the input"):
+        refuse_unsafe_outputs([out, link], [source])
+    with pytest.raises(MissionError, match="are one file") as refused:
+        refuse_unsafe_outputs([out, tmp_path / "sub" / ".." / "out.json"], [source])
+    assert refused.value.problems[0].where == str(tmp_path / "sub" / ".." / "out.json")
+    with pytest.raises(MissionError, match="it is a folder"):
+        refuse_unsafe_outputs([tmp_path], [])
+    refuse_unsafe_outputs([out, tmp_path / "other.json", None, "-", "-"], [source, None])  # all distinct
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.json", "link.json"]
+
+
+# ----------------------------------------------------------------------------------------------
+# allocate: output, schedule and chart
+
+
+@pytest.mark.parametrize("clash", ["schedule", "gantt"])
+def test_allocate_refuses_two_outputs_in_one_file(tmp_path: Path, capsys, clash: str):
+    out = tmp_path / "out.png"
+    extra = ["--schedule", str(out)] if clash == "schedule" else ["--schedule", str(tmp_path / "s.json"),
+                                                                   "--gantt", str(out)]
+    assert main(["allocate", str(DELIVERY), "--fleet", str(DELIVERY / "fleet.json"), "-o", str(out), "-q",
+                 *extra]) == 2
+    assert f"error: {out}: the outputs {out} and {out} are one file" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_allocate_refuses_a_folder_before_the_search(tmp_path: Path, capsys):
+    (tmp_path / "out.json").mkdir()
+    schedule = tmp_path / "schedule.json"
+    assert main(["allocate", str(DELIVERY), "--fleet", str(DELIVERY / "fleet.json"), "-o", str(tmp_path / "out.json"),
+                 "--schedule", str(schedule), "-q"]) == 2
+    assert "out.json: cannot write the output: it is a folder" in capsys.readouterr().err
+    assert not schedule.exists()
+
+
+# ----------------------------------------------------------------------------------------------
+# export-hddl: domain and problem
+
+
+def test_export_refuses_the_problem_over_the_domain(tmp_path: Path, capsys):
+    folder = require_reference() / "missions" / "lab-samples-logistics"
+    out = tmp_path / "d.hddl"
+    assert main(["export-hddl", str(folder), "-o", str(out), "--problem-out", str(out), "-q"]) == 2
+    assert "are one file" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_refused_problem_writes_no_domain(tmp_path: Path, capsys):
+    out = tmp_path / "d.hddl"
+    assert main(["export-hddl", str(HOSPITAL), "-o", str(out), "--problem-out", str(tmp_path / "p.hddl")]) == 2
+    assert "error: the mission's tasks are not one total order" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------------------------
+# compare --plot
+
+
+def test_compare_refuses_a_plot_over_an_input_before_running(tmp_path: Path, capsys):
+    mission = tmp_path / "mission"
+    shutil.copytree(HOSPITAL, mission)
+    chart = mission / "knowledge" / "chart.png"
+    chart.symlink_to(mission / "gm" / "hospital-disinfection-gm.json")
+    before = (mission / "gm" / "hospital-disinfection-gm.json").read_bytes()
+    hddl, gm, cfg = (next((mission / d).iterdir()) for d in ("hddl", "gm", "configuration"))
+    assert main(["compare", str(hddl), str(gm), str(cfg), "--plot", str(chart), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "would overwrite the input" in err and "running" not in err
+    assert gm.read_bytes() == before
+
+
+# ----------------------------------------------------------------------------------------------
+# the mutrose drop-in: the configuration's output path
+
+
+def test_dropin_never_writes_its_output_over_an_input(tmp_path: Path):
+    mission = tmp_path / "mission"
+    shutil.copytree(HOSPITAL, mission)
+    config = json.loads((mission / "configuration" / "configuration.json").read_text())
+    config["output"]["file_path"] = "knowledge/world_db.xml"
+    (mission / "configuration" / "configuration.json").write_text(json.dumps(config))
+    world = (mission / "knowledge" / "world_db.xml").read_bytes()
+    run = subprocess.run([sys.executable, "-m", "mutrose_cp.dropin", "hddl/hospital-disinfection.hddl",
+                          "gm/hospital-disinfection-gm.json", "configuration/configuration.json"],
+                         cwd=mission, capture_output=True, text=True, timeout=120, env=dict(os.environ))
+    assert run.returncode == 2
+    assert "knowledge/world_db.xml: the output would overwrite the input" in run.stdout
+    assert (mission / "knowledge" / "world_db.xml").read_bytes() == world
