@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -121,3 +122,28 @@ def test_dropin_never_writes_its_output_over_an_input(tmp_path: Path):
     assert run.returncode == 2
     assert "knowledge/world_db.xml: the output would overwrite the input" in run.stdout
     assert (mission / "knowledge" / "world_db.xml").read_bytes() == world
+
+
+# ----------------------------------------------------------------------------------------------
+# iHTN files (decompose --ihtn, mutrose -h): a full disk, a file where the folder goes
+
+
+def _small_files() -> None:
+    resource.setrlimit(resource.RLIMIT_FSIZE, (200, 200))
+
+
+def test_a_full_disk_leaves_no_ihtn_folder_and_names_it(tmp_path: Path):
+    run = subprocess.run([sys.executable, "-m", "mutrose_cp", "decompose", str(DELIVERY), "--ihtn", "ihtn",
+                          "--ihtn-orderings", "one", "-q"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120, preexec_fn=_small_files)
+    assert run.returncode == 2
+    assert "error: ihtn: cannot write the output: File too large" in run.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_file_where_the_ihtn_folder_goes_is_refused(tmp_path: Path, capsys):
+    (tmp_path / "ihtn").write_text("notes\n")
+    assert main(["decompose", str(DELIVERY), "--ihtn", str(tmp_path / "ihtn"), "-q"]) == 2
+    assert f"error: {tmp_path / 'ihtn'}: cannot write the iHTN files: it is a file; give a folder" in \
+        capsys.readouterr().err
+    assert (tmp_path / "ihtn").read_text() == "notes\n"

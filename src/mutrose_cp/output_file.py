@@ -32,7 +32,8 @@ def _umask() -> int:
     return mask
 
 
-def _failure(path: str | os.PathLike[str], err: OSError) -> MissionError:
+def write_failure(path: str | os.PathLike[str], err: OSError) -> MissionError:
+    """Why an output could not be written, located at the path the user gave."""
     reason = err.strerror or str(err)
     return MissionError(f"cannot write the output: {reason}", os.fspath(path))
 
@@ -80,7 +81,7 @@ def _standard_output(mode: str) -> Iterator[IO[Any]]:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         raise MissionError("cannot write the output: the reader closed the pipe", "standard output") from None
     except OSError as err:
-        raise _failure("standard output", err) from None
+        raise write_failure("standard output", err) from None
 
 
 def _existing(target: Path, path: str | os.PathLike[str]) -> os.stat_result | None:
@@ -91,7 +92,7 @@ def _existing(target: Path, path: str | os.PathLike[str]) -> os.stat_result | No
     except FileNotFoundError:
         return None
     except OSError as err:
-        raise _failure(path, err) from None
+        raise write_failure(path, err) from None
     if stat.S_ISDIR(existing.st_mode):
         raise MissionError("cannot write the output: it is a folder; give a file name", os.fspath(path))
     return existing
@@ -106,7 +107,7 @@ def _written_through(target: Path, path: str | os.PathLike[str], mode: str) -> I
         with open(target, mode, encoding=encoding, newline=newline) as fh:
             yield fh
     except OSError as err:
-        raise _failure(path, err) from None
+        raise write_failure(path, err) from None
 
 
 @contextmanager
@@ -120,7 +121,7 @@ def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     except OSError as err:
-        raise _failure(path, err) from None
+        raise write_failure(path, err) from None
     try:
         os.fchmod(fd, stat.S_IMODE(existing.st_mode) if existing is not None else 0o666 & ~_umask())
         with os.fdopen(fd, mode, encoding=encoding, newline=newline) as fh:
@@ -132,7 +133,7 @@ def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
         except OSError:
             pass
         if isinstance(exc, OSError):
-            raise _failure(path, exc) from None
+            raise write_failure(path, exc) from None
         raise
 
 
