@@ -177,7 +177,9 @@ def _write_ihtns(model, maximum: int) -> None:
     from .ihtn import refuse_oversized_export, write_ihtns
 
     with phase("counting iHTN files"):
-        refuse_oversized_export(model, False, maximum, str(IHTN_FOLDER))
+        refuse_oversized_export(model, False, maximum, str(IHTN_FOLDER), "raise the bound with --ihtn-max=N "
+                                "(-h writes every ordering of every valid decomposition), or use mutrose-cp "
+                                f"decompose --ihtn {IHTN_FOLDER} --ihtn-orderings one")
     with phase("exporting iHTNs"):
         write_ihtns(model, IHTN_FOLDER)
 

@@ -252,15 +252,20 @@ def ihtn_file_count(model: OutputModel, one_per_decomposition: bool, cap: int, b
 DEFAULT_MAX_FILES = 10_000  # an export of more files is refused before anything is written
 
 
-def refuse_oversized_export(model: OutputModel, one_per_decomposition: bool, maximum: int, folder: str) -> int:
+REMEDIES = ("write the first ordering of each with --ihtn-orderings one, list fewer decompositions (--limit K, "
+            "--optimize), or raise --ihtn-max")  # the options of ``mutrose-cp decompose``
+
+
+def refuse_oversized_export(model: OutputModel, one_per_decomposition: bool, maximum: int, folder: str,
+                            remedies: str = REMEDIES) -> int:
     """The number of files the export will write; a :class:`MissionError` (located at
-    ``folder``) when that is more than ``maximum``, saying how many and what to do instead."""
+    ``folder``) when that is more than ``maximum``, saying how many and what to do instead
+    (``remedies``: the options of the command that asked)."""
     files = ihtn_file_count(model, one_per_decomposition, maximum + 1)
     if files > maximum:
         raise MissionError(f"the iHTN export would write {_how_many_files(model, one_per_decomposition, maximum)}, "
                            f"over --ihtn-max {maximum}; one file is written per ordering of each listed "
-                           "decomposition: write the first ordering of each with --ihtn-orderings one, list fewer "
-                           "decompositions (--limit K, --optimize), or raise --ihtn-max", folder)
+                           f"decomposition: {remedies}", folder)
     return files
 
 
