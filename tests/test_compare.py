@@ -308,6 +308,7 @@ def test_plot_without_matplotlib_is_a_clear_error(monkeypatch, tmp_path, capsys)
     (["--plot", "chart.txt"], "cannot tell the chart's format from 'chart.txt'"),
     (["--original", "/nonexistent/MutroseMissionDecomposer"], "--original: not an executable file"),
     (["--time-limit", "0"], "0 is not a positive number of seconds"),
+    (["--time-limit", "1e8"], "1e8 is out of range: give at most 10000000 seconds"),
     (["--time-limit", "soon"], "expected a number of seconds, got 'soon'"),
 ])
 def test_bad_options_exit_2(capsys, args, message):

@@ -14,7 +14,7 @@ import sys
 import time
 from collections import Counter
 from pathlib import Path
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from . import __version__
 from .errors import MissionError, Problem
@@ -461,7 +461,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 MAX_COUNT = 2**62  # beyond any listing that fits on a disk; CP-SAT's limits are 64-bit
 
 
-def _count_option(minimum: int):
+def _count_option(minimum: int) -> Callable[[str], int]:
     """An argparse type: an integer from ``minimum`` to ``MAX_COUNT`` (a usage error, exit 2,
     otherwise)."""
     def parse(text: str) -> int:
@@ -475,18 +475,19 @@ def _count_option(minimum: int):
     return parse
 
 
+MAX_SECONDS = 10**7  # about 115 days: any longer limit is a typo
+
+
 def _seconds(text: str) -> float:
-    """An argparse type: a positive number of seconds."""
+    """An argparse type: a positive number of seconds, at most ``MAX_SECONDS``."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
-
-
-    if not 0 < value <= 10**7:
-        raise argparse.ArgumentTypeError(f"{text} is out of range: give a number of seconds above 0")
+    if value > MAX_SECONDS:
+        raise argparse.ArgumentTypeError(f"{text} is out of range: give at most {MAX_SECONDS} seconds")
     return value
 
 
@@ -515,8 +516,6 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
     common(p)
     p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
-
-
     p.add_argument("--fleet", metavar="FLEET.json", help="also check a fleet file against the mission")
     p.set_defaults(func=cmd_check)
 

@@ -31,7 +31,7 @@ import signal
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Mapping, Sequence
+from typing import IO, TYPE_CHECKING, Mapping, Sequence
 
 from . import console
 from .errors import MissionError
@@ -41,6 +41,10 @@ from .io.text import MB, input_limit
 from .output_file import refuse_unsafe_outputs
 from .process import command_settings, exit_process, usable_stderr
 from .solve.decompose import Algorithm, DecompositionRequest
+
+if TYPE_CHECKING:  # imported when the command runs
+    from .mission import Mission
+    from .output import OutputModel
 
 ALGORITHM_ENV = "MUTROSE_ALGORITHM"
 IHTN_FOLDER = Path("ihtn")
@@ -162,7 +166,7 @@ def _every_decomposition(algorithm: Algorithm) -> DecompositionRequest:
     return DecompositionRequest(algorithm=algorithm, limit=None)
 
 
-def _trace_mission(mission, out) -> None:
+def _trace_mission(mission: Mission, out: IO[str]) -> None:
     """``-v``: the inputs and every stage up to the Task Graph."""
     files = {"domain": mission.domain.source, "goal model": mission.goal_model.source,
              "configuration": str(mission.config_path), "world": str(mission.world_path or "")}
@@ -173,7 +177,7 @@ def _trace_mission(mission, out) -> None:
     console.print_task_graph(mission.task_graph, out)
 
 
-def _write_ihtns(model, maximum: int) -> None:
+def _write_ihtns(model: OutputModel, maximum: int) -> None:
     from .ihtn import refuse_oversized_export, write_ihtns
 
     with phase("counting iHTN files"):

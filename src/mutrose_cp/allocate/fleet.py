@@ -94,9 +94,6 @@ class Fleet:
         """A fleet from the same structure as the file, for programs (validated alike)."""
         return cls.parse(json.dumps(data, indent=1), source)
 
-    def robot(self, name: str) -> Robot:
-        return next(r for r in self.robots if r.name == name)
-
     def where(self, path: Path, *, key: bool = False) -> str:
         """``file:line:col`` of a value of the fleet file (the file name without a document)."""
         return self.document.at(path, key=key) if self.document is not None else self.source
