@@ -5,6 +5,7 @@ A command that writes several files makes them all before writing the first, so 
 found late leaves none of them behind."""
 from __future__ import annotations
 
+import errno
 import json
 import os
 import resource
@@ -147,3 +148,20 @@ def test_a_file_where_the_ihtn_folder_goes_is_refused(tmp_path: Path, capsys):
     assert f"error: {tmp_path / 'ihtn'}: cannot write the iHTN files: it is a file; give a folder" in \
         capsys.readouterr().err
     assert (tmp_path / "ihtn").read_text() == "notes\n"
+
+
+# ----------------------------------------------------------------------------------------------
+# how both front ends tell a failure
+
+
+@pytest.mark.parametrize("front_end", ["mutrose-cp", "mutrose"])
+def test_both_front_ends_tell_a_failure_alike(capsys, front_end: str):
+    from mutrose_cp import cli, dropin
+
+    report, stream = (cli._report, "err") if front_end == "mutrose-cp" else (dropin._report, "out")
+    assert report(OSError(errno.EFBIG, "File too large")) == 2  # a write error without a file name
+    assert report(OSError(errno.ENOENT, "No such file or directory", "gm.json")) == 2
+    assert report(MissionError("unknown goal", "gm.json: goal G3")) == 2
+    printed = getattr(capsys.readouterr(), stream).splitlines()
+    assert printed == ["error: File too large", "error: gm.json: No such file or directory",
+                       "error: gm.json: goal G3: unknown goal"]

@@ -23,7 +23,7 @@ from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
 from .output_file import refuse_unsafe_outputs
-from .process import command_settings, exit_process, usable_stderr
+from .process import Failure, command_settings, exit_process, failure_lines, failure_problems, failure_status, usable_stderr
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
 
@@ -664,32 +664,16 @@ def _main(argv: Sequence[str] | None) -> int:
         return status
 
 
-def _problems(err: Interrupted | MissionError | RecursionError | OSError) -> list[dict[str, str | int | None]]:
+def _problems(err: Failure) -> list[dict[str, str | int | None]]:
     """Why a command failed, as the records ``--json-summary`` lists."""
-    if isinstance(err, MissionError):
-        return [p.record() for p in err.problems]
-    if isinstance(err, OSError):
-        return [Problem(str(err.filename or ""), err.strerror or str(err)).record()]
-    if isinstance(err, Interrupted):
-        return [Problem("", f"interrupted{' while ' + err.during if err.during else ''} ({err})").record()]
-    return [Problem("", "the mission is nested too deeply to process").record()]
+    return [p.record() for p in failure_problems(err)]
 
 
-def _report(err: Interrupted | MissionError | RecursionError | OSError) -> int:
+def _report(err: Failure) -> int:
     """Print why a command stopped (never a traceback) and return its exit status."""
-    match err:
-        case Interrupted(during=during):
-            print(f"interrupted{' while ' + during if during else ''} ({err}): no output was written", file=sys.stderr)
-            return err.exit_code
-        case MissionError(problems=problems):
-            for problem in problems:
-                print(f"error: {problem}", file=sys.stderr)
-            if len(problems) > 1:
-                print(f"{len(problems)} problems found", file=sys.stderr)
-            return err.exit_code
-        case RecursionError():
-            print("error: the mission is nested too deeply to process", file=sys.stderr)
-            return 2
-        case OSError():
-            print(f"error: {err.filename or ''}: {err.strerror or err}", file=sys.stderr)
-            return 2
+    lines = failure_lines(err)
+    for line in lines:
+        print(line, file=sys.stderr)
+    if isinstance(err, MissionError) and len(lines) > 1:
+        print(f"{len(lines)} problems found", file=sys.stderr)
+    return failure_status(err)

@@ -39,7 +39,7 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .output_file import refuse_unsafe_outputs
-from .process import command_settings, exit_process, usable_stderr
+from .process import Failure, command_settings, exit_process, failure_lines, failure_status, usable_stderr
 from .solve.decompose import Algorithm, DecompositionRequest
 
 if TYPE_CHECKING:  # imported when the command runs
@@ -188,24 +188,12 @@ def _write_ihtns(model: OutputModel, maximum: int) -> None:
         write_ihtns(model, IHTN_FOLDER)
 
 
-def _report(err: BaseException) -> int:
+def _report(err: Failure) -> int:
     """Why the command stopped, on stdout as the original prints its messages (the plug-in
     shows stdout), and the exit status."""
-    match err:
-        case Interrupted(during=during):
-            print(f"interrupted{' while ' + during if during else ''} ({err}): no output was written")
-            return err.exit_code
-        case MissionError(problems=problems):
-            for problem in problems:
-                print(f"error: {problem}")
-            return err.exit_code
-        case RecursionError():
-            print("error: the mission is nested too deeply to process")
-            return 2
-        case OSError():
-            print(f"error: {err.filename or ''}: {err.strerror or err}")
-            return 2
-    raise err
+    for line in failure_lines(err):
+        print(line)
+    return failure_status(err)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
