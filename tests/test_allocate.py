@@ -228,6 +228,23 @@ def test_check_names_fleet_names_the_mission_does_not_know(tmp_path, capsys):
     assert main(["check", str(DELIVERY), "--fleet", str(FLEET), "-q"]) == 0
 
 
+def test_a_misspelt_place_of_the_travel_table_is_named(tmp_path, capsys):
+    """A place only the table names, where no robot starts, on a single road, changes no time:
+    a misspelt place, whose intended entry would silently be left out.  A junction (two roads)
+    is a place of the road network."""
+    data = json.loads(FLEET.read_text())
+    data["travel"]["times"] = {"Dock": {"WardAA": 4}}
+    fleet = write_fleet(tmp_path, data)
+    assert main(["check", str(DELIVERY), "--fleet", str(fleet), "-q"]) == 2
+    err = capsys.readouterr().err
+    line = next(i for i, text in enumerate(fleet.read_text().splitlines(), 1) if '"WardAA"' in text)
+    column = fleet.read_text().splitlines()[line - 1].index('"WardAA"') + 1
+    assert f"{fleet}:{line}:{column}: unknown place 'WardAA': not a world location" in err
+    assert "Did you mean 'WardA'?" in err
+    data["travel"]["times"] = {"Dock": {"Junction": 4}, "Junction": {"WardA": 3}}
+    assert main(["check", str(DELIVERY), "--fleet", str(write_fleet(tmp_path, data)), "-q"]) == 0
+
+
 def test_a_task_place_without_coordinates_is_located_in_the_world(mission, tmp_path, capsys):
     world = mission / "knowledge" / "world_db.xml"
     world.write_text(world.read_text().replace(" <x>30</x> <y>40</y>", "", 1))  # WardB
