@@ -193,6 +193,8 @@ def test_a_missing_robot_number_is_named(tmp_path, capsys):
     ('{"robots": [{"name": "r1", "capabilities": []}],\n "travel": {"coordinates": {"Dock": [1]}}}',
      ":2:37: travel.coordinates.Dock: expected a point [x, y]"),
     ('{"robots": [}', ":1:13: invalid JSON"),
+    ('{"robots": [{"name": "NaN \\"r1", "capabilities": [],\n   "speed": NaN}]}',
+     ":2:13: invalid JSON: NaN is not a JSON number"),
     ('{"robots": []}', ":1:12: robots: expected a non-empty list of robots"),
 ])
 def test_fleet_file_errors_are_located(tmp_path, capsys, text, expected):

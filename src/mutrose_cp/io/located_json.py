@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -60,7 +61,7 @@ def parse_located_json(text: str, source: str) -> LocatedJson:
     except json.JSONDecodeError as err:
         raise MissionError(json_syntax_problem(err, text, source)) from None
     except ValueError as err:  # NaN, Infinity
-        raise MissionError(Problem(source, f"invalid JSON: {err}")) from None
+        raise MissionError(Problem(_constant_at(text, source), f"invalid JSON: {err}")) from None
     except RecursionError:
         raise MissionError(json_depth_problem(text, source)) from None
     tree = cached_lalr_parser("json.lark", propagate_positions=True, maybe_placeholders=False).parse(text)
@@ -68,6 +69,19 @@ def parse_located_json(text: str, source: str) -> LocatedJson:
     keys: dict[Path, tuple[int, int]] = {}
     _walk(tree, (), values, keys)
     return LocatedJson(source, data, values, keys)
+
+
+_STRING_OR_CONSTANT = re.compile(r'"(?:[^"\\]|\\.)*"|(?P<constant>-?Infinity|NaN)')
+
+
+def _constant_at(text: str, source: str) -> str:
+    """``file:line:col`` of the first ``NaN`` or ``Infinity`` outside a string."""
+    for found in _STRING_OR_CONSTANT.finditer(text):
+        if found["constant"]:
+            start = found.start()
+            line = text.count("\n", 0, start) + 1
+            return located(source, line, start - (text.rfind("\n", 0, start) + 1) + 1)
+    return source
 
 
 def _position(node: Tree | Token) -> tuple[int, int]:
