@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import re
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
@@ -269,7 +270,8 @@ def test_bad_options_are_usage_errors(tmp_path, capsys):
     status, out, _ = allocate(tmp_path, DELIVERY, FLEET, "--objective", "fastest")
     assert status == 2 and "unknown objective 'fastest'" in capsys.readouterr().err and not out.exists()
     status, _, _ = allocate(tmp_path, DELIVERY, FLEET, "--gantt", str(tmp_path / "chart.pdf"))
-    assert status == 2 and "PNG or SVG" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert status == 2 and "--gantt: cannot tell the chart's format from" in err and "name a .png or .svg file" in err
 
 
 # ----------------------------------------------------------------------------------------------
@@ -284,6 +286,16 @@ def test_gantt_chart(tmp_path, suffix):
     assert status == 0
     head = chart.read_bytes()[:200]
     assert head.startswith(b"\x89PNG") if suffix == ".png" else b"<svg" in head or b"<?xml" in head
+    again = tmp_path / f"again{suffix}"
+    assert allocate(tmp_path, DELIVERY, FLEET, "--gantt", str(again), name="again")[0] == 0
+    assert again.read_bytes() == chart.read_bytes()  # no date, no version, fixed ids
+
+
+def test_gantt_without_matplotlib_is_refused_before_the_search(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed
+    status, out, schedule = allocate(tmp_path, DELIVERY, FLEET, "--gantt", str(tmp_path / "chart.png"))
+    assert status == 2 and "--gantt needs matplotlib, which is not installed" in capsys.readouterr().err
+    assert not out.exists() and not schedule.exists()
 
 
 def test_the_example_script_runs(capsys):

@@ -156,10 +156,9 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     objective = Objective.parse(args.objective)
     if args.gantt:
-        from .allocate.gantt import gantt_format, matplotlib_ready
+        from .allocate.gantt import gantt_format
 
-        gantt_format(args.gantt)
-        matplotlib_ready()
+        gantt_format(args.gantt)  # and matplotlib, before any work
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     _warn(args, mission)
     fleet = Fleet.read(args.fleet)
