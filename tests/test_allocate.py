@@ -274,6 +274,24 @@ def test_bad_options_are_usage_errors(tmp_path, capsys):
     assert status == 2 and "--gantt: cannot tell the chart's format from" in err and "name a .png or .svg file" in err
 
 
+
+@pytest.mark.parametrize("option,value,message", [
+    ("--seed", str(2**40), "--seed: 1099511627776 is out of range: give a number from 0 to 2147483647"),
+    ("--workers", "100000", "--workers: 100000 is out of range: give a number from 1 to 256"),
+])
+def test_solver_options_beyond_cp_sat_are_usage_errors(tmp_path, capsys, option, value, message):
+    """CP-SAT takes a 32-bit seed (a larger one was a TypeError inside it) and fails at once with
+    tens of thousands of threads (which read as a timeout)."""
+    status, out, _ = allocate(tmp_path, DELIVERY, FLEET, option, value)
+    err = capsys.readouterr().err
+    assert status == 2 and message in err and "Traceback" not in err and not out.exists()
+    from mutrose_cp.allocate import AllocationOptions
+    from mutrose_cp.errors import MissionError
+
+    with pytest.raises(MissionError, match="out of range"):
+        AllocationOptions(**{option.lstrip("-"): int(value)})
+
+
 # ----------------------------------------------------------------------------------------------
 # the Gantt chart
 

@@ -460,16 +460,16 @@ def cmd_compare(args: argparse.Namespace) -> int:
 MAX_COUNT = 2**62  # beyond any listing that fits on a disk; CP-SAT's limits are 64-bit
 
 
-def _count_option(minimum: int) -> Callable[[str], int]:
-    """An argparse type: an integer from ``minimum`` to ``MAX_COUNT`` (a usage error, exit 2,
+def _count_option(minimum: int, maximum: int = MAX_COUNT) -> Callable[[str], int]:
+    """An argparse type: an integer from ``minimum`` to ``maximum`` (a usage error, exit 2,
     otherwise)."""
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if not minimum <= value <= MAX_COUNT:
-            raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {MAX_COUNT}")
+        if not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {maximum}")
         return value
     return parse
 
@@ -491,6 +491,8 @@ def _seconds(text: str) -> float:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .allocate.options import MAX_SEED, MAX_WORKERS
+
     parser = argparse.ArgumentParser(
         prog="mutrose-cp",
         description="Decompose MutRoSe multi-robot missions (goal model + HDDL + configuration + world).",
@@ -557,9 +559,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="minimise the makespan (default), the total travel, or A * makespan + B * travel")
     p.add_argument("--time-limit", type=_seconds, default=10.0, metavar="S",
                    help="stop the search after S seconds with the best schedule found (default 10)")
-    p.add_argument("--workers", type=_count_option(1), default=1, metavar="N",
+    p.add_argument("--workers", type=_count_option(1, MAX_WORKERS), default=1, metavar="N",
                    help="CP-SAT search threads (default 1: the same schedule on every finished run)")
-    p.add_argument("--seed", type=_count_option(0), default=0, help="CP-SAT random seed (default 0)")
+    p.add_argument("--seed", type=_count_option(0, MAX_SEED), default=0, help="CP-SAT random seed (default 0)")
     p.set_defaults(func=cmd_allocate)
 
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
