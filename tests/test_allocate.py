@@ -187,6 +187,8 @@ def test_a_missing_robot_number_is_named(tmp_path, capsys):
      ":2:16: durations.defualt: unknown key 'defualt'. Did you mean 'default'?"),
     ('{"robots": [{"name": "r1", "capabilities": ["navigation"],\n   "speed": -1}]}',
      ":2:13: robots[0].speed: -1 is out of range"),
+    ('{"robots": [{"name": "r1", "capabilities": ["navigation"],\n   "speed": 1e-300}]}',
+     ":2:13: robots[0].speed: 1e-300 is out of range: give a number from 0.001 to 1e+06"),
     ('{"robots": [{"name": "r1", "capabilities": []},\n {"name": "r1", "capabilities": []}]}',
      ":2:11: robots[1].name: robot 'r1' is listed twice"),
     ('{"robots": [{"name": "r1", "capabilities": []}], "durations": {"actions": {"navigate": 1.5}}}',

@@ -27,6 +27,7 @@ METRICS = ("euclidean", "manhattan")
 MAX_DURATION = 10**6  # per action: a schedule's times stay far inside CP-SAT's 64-bit range
 MAX_TIME = 10**6  # per travel-table entry (at speed 1)
 MAX_COORDINATE = 10**9
+MIN_SPEED = 10**-3  # the slowest robot's longest trip (coordinates at their bound) stays near 10^12 units
 
 
 @dataclass(frozen=True)
@@ -137,8 +138,7 @@ class _Reader:
         self.problem(path, f"expected a non-empty string, got {_kind(value)}")
         return None
 
-    def number(self, value: Any, path: Path, *, low: float, high: float, whole: bool = False,
-               positive: bool = False) -> float | None:
+    def number(self, value: Any, path: Path, *, low: float, high: float, whole: bool = False) -> float | None:
         what = "a whole number" if whole else "a number"
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             self.problem(path, f"expected {what}, got {_kind(value)}")
@@ -146,9 +146,8 @@ class _Reader:
         if whole and not float(value).is_integer():
             self.problem(path, f"expected {what}, got {value!r}", "Times are whole time units.")
             return None
-        if positive and value <= 0 or not low <= value <= high:
-            bound = f"above 0 and at most {high:g}" if positive else f"from {low:g} to {high:g}"
-            self.problem(path, f"{value!r} is out of range: give a number {bound}")
+        if not low <= value <= high:
+            self.problem(path, f"{value!r} is out of range: give a number from {low:g} to {high:g}")
             return None
         return float(value)
 
@@ -210,7 +209,7 @@ class _Reader:
         name = self.string(item["name"], (*path, "name")) if "name" in item else None
         capabilities = self.capabilities(item.get("capabilities", []), (*path, "capabilities"))
         start = self.string(item["start"], (*path, "start")) if "start" in item else None
-        speed = self.number(item.get("speed", 1.0), (*path, "speed"), low=0, high=MAX_TIME, positive=True)
+        speed = self.number(item.get("speed", 1.0), (*path, "speed"), low=MIN_SPEED, high=MAX_TIME)
         if name is None or capabilities is None or speed is None or ("start" in item and start is None):
             return None
         return Robot(name, capabilities, start, speed)
