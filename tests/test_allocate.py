@@ -266,6 +266,10 @@ def test_bad_world_coordinates_are_located(mission, tmp_path, capsys):
     assert main(["check", str(mission), "--fleet", str(FLEET), "-q"]) == 2
     err = capsys.readouterr().err
     assert f"{world}:" in err and "location SupplyRoom: x must be a number, got 'east'" in err
+    world.write_text(world.read_text().replace("<x>east</x>", "<x>1e300</x>", 1))  # trip times of 300 digits
+    assert main(["allocate", str(mission), "--fleet", str(FLEET), "-q", "-o", str(tmp_path / "o.json")]) == 2
+    err = capsys.readouterr().err
+    assert f"{world}:20: location SupplyRoom: x 1e300 is out of range: give a number from -1e+09 to 1e+09" in err
 
 
 def test_bad_options_are_usage_errors(tmp_path, capsys):
