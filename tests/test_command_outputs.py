@@ -6,12 +6,14 @@ found late leaves none of them behind."""
 from __future__ import annotations
 
 import errno
+import fcntl
 import json
 import os
 import resource
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -19,7 +21,7 @@ import pytest
 from conftest import require_reference
 from mutrose_cp.cli import main
 from mutrose_cp.errors import MissionError
-from mutrose_cp.output_file import refuse_unsafe_outputs
+from mutrose_cp.output_file import refuse_unsafe_outputs, written_together
 
 ROOT = Path(__file__).resolve().parent.parent
 DELIVERY = ROOT / "examples" / "item-delivery"
@@ -165,3 +167,51 @@ def test_both_front_ends_tell_a_failure_alike(capsys, front_end: str):
     printed = getattr(capsys.readouterr(), stream).splitlines()
     assert printed == ["error: File too large", "error: gm.json: No such file or directory",
                        "error: gm.json: goal G3: unknown goal"]
+
+
+# ----------------------------------------------------------------------------------------------
+# concurrent runs: a set of files written in turn
+
+
+def test_the_folders_of_a_set_of_outputs_are_locked_while_it_is_written(tmp_path: Path):
+    outputs = [tmp_path / "a" / "x.json", tmp_path / "b" / "y.json", None, "-"]
+    with written_together(outputs):
+        for folder in ("a", "b"):
+            fd = os.open(tmp_path / folder, os.O_RDONLY)
+            try:
+                with pytest.raises(BlockingIOError):
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            finally:
+                os.close(fd)
+    fd = os.open(tmp_path / "a", os.O_RDONLY)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # released
+    os.close(fd)
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["a", "b"]  # nothing left behind
+
+
+def _blocked_on_a_lock(pid: int) -> bool:
+    """Whether process ``pid`` waits for a lock (``/proc/locks`` marks waiters with ``->``)."""
+    return any(line.split()[1] == "->" and line.split()[5] == str(pid)
+               for line in Path("/proc/locks").read_text().splitlines() if len(line.split()) > 5)
+
+
+@pytest.mark.skipif(not Path("/proc/locks").exists(), reason="needs Linux's /proc/locks")
+def test_export_waits_for_a_run_writing_the_same_files(tmp_path: Path):
+    """Another run holds the folder (as export-hddl and allocate do while writing their set):
+    this run writes its files only once that one is done, so the two never mix."""
+    folder = tmp_path / "out"
+    folder.mkdir()
+    other = os.open(folder, os.O_RDONLY)
+    fcntl.flock(other, fcntl.LOCK_EX)
+    run = subprocess.Popen([sys.executable, "-m", "mutrose_cp", "export-hddl", str(HOSPITAL), "-o",
+                            str(folder / "d.hddl"), "-q"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        while run.poll() is None and not _blocked_on_a_lock(run.pid):
+            time.sleep(0.02)
+        waited = run.poll() is None and not (folder / "d.hddl").exists()
+    finally:
+        os.close(other)
+    _, err = run.communicate(timeout=120)
+    assert waited, "the run wrote while another held the folder"
+    assert run.returncode == 0, err
+    assert (folder / "d.hddl").is_file()

@@ -22,7 +22,7 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
-from .output_file import refuse_unsafe_outputs
+from .output_file import refuse_unsafe_outputs, written_together
 from .process import Failure, command_settings, exit_process, failure_lines, failure_problems, failure_status, usable_stderr
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
@@ -173,7 +173,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
             allocation = mission.allocate(fleet, options, progress)
     finally:
         progress.close()
-    with phase("writing the output"):
+    with phase("writing the output"), written_together((schedule_path, out_path, args.gantt)):
         write_schedule(allocation, schedule_path)
         write_decomposition(allocation, out_path, args.format or mission.config.output.file_type)
         if args.gantt:

@@ -17,7 +17,7 @@ from .hddl_problem import ProblemNotExpressible, mission_problem
 from .io.hddl import load_domain
 from .io.hddl_writer import HddlExport
 from .mission import Mission, find_mission_files
-from .output_file import atomic_writer, refuse_unsafe_outputs
+from .output_file import atomic_writer, refuse_unsafe_outputs, written_together
 
 
 def _mission_files(args: argparse.Namespace) -> tuple[Path, tuple[Path, Path] | None]:
@@ -72,10 +72,12 @@ def export_hddl(args: argparse.Namespace) -> int:
         refuse_unsafe_outputs(outputs, [mission.world_path])
     export = HddlExport(mission.domain if mission is not None else load_domain(hddl))
     written = []
-    for what, path, text in zip(("domain", "problem"), outputs, _texts(args, export, mission)):
-        with atomic_writer(path) as out:
-            out.write(text)
-        written.append(f"{what} {path}")
+    texts = _texts(args, export, mission)
+    with written_together(outputs[:len(texts)]):
+        for what, path, text in zip(("domain", "problem"), outputs, texts):
+            with atomic_writer(path) as out:
+                out.write(text)
+            written.append(f"{what} {path}")
     if not args.quiet:
         for warning in export.warnings:
             print(f"warning: {warning}", file=sys.stderr)

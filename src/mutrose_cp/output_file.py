@@ -10,9 +10,11 @@
 
 :func:`refuse_unsafe_outputs` checks a command's outputs before it does any work: an output that
 is one of its inputs, two outputs that are one file, an output that is a folder.
+:func:`written_together` makes concurrent runs that write the same set of files write it in turn.
 """
 from __future__ import annotations
 
+import fcntl
 import os
 import stat
 import sys
@@ -172,3 +174,29 @@ def refuse_unsafe_outputs(outputs: Iterable[Pathlike | None], inputs: Iterable[P
             raise MissionError(f"the outputs {os.fspath(written[identity])} and {os.fspath(path)} are one file, "
                                "which the later would replace: give each output a file of its own", os.fspath(path))
         written[identity] = path
+
+
+@contextmanager
+def written_together(paths: Iterable[Pathlike | None]) -> Iterator[None]:
+    """Hold a lock on the folders of ``paths`` while a command writes them one after the other.
+
+    Each file is replaced atomically anyway; the lock makes two runs that write the same set
+    (``allocate``'s decomposition, schedule and chart; ``export-hddl``'s domain and problem)
+    write it in turn, so the set ends up all from one run, never a mixture.  The folders are
+    the locks (``flock``, in a fixed order): nothing is left behind.  ``None`` and ``-`` are
+    skipped; a folder that cannot be created or opened is left to the write to report."""
+    folders = sorted({os.path.dirname(os.path.realpath(p)) for p in paths if p is not None and os.fspath(p) != STDOUT})
+    held: list[int] = []
+    try:
+        for folder in folders:
+            try:
+                os.makedirs(folder, exist_ok=True)
+                fd = os.open(folder, os.O_RDONLY)
+            except OSError:
+                continue
+            held.append(fd)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        for fd in held:
+            os.close(fd)  # releases the lock
