@@ -215,3 +215,21 @@ def test_export_waits_for_a_run_writing_the_same_files(tmp_path: Path):
     assert waited, "the run wrote while another held the folder"
     assert run.returncode == 0, err
     assert (folder / "d.hddl").is_file()
+
+
+@pytest.mark.parametrize("command", [["mutrose_cp", "decompose", str(HOSPITAL), "-o", "-"],
+                                     ["mutrose_cp.dropin", "hddl/hospital-disinfection.hddl",
+                                      "gm/hospital-disinfection-gm.json", "configuration/configuration.json", "-p"]])
+def test_stdout_and_stderr_on_one_closed_pipe(tmp_path: Path, command: list[str]):
+    """``… 2>&1 | head``: the message about the closed pipe cannot be told either; the command
+    still ends with status 2, not with a traceback (status 1)."""
+    mission = tmp_path / "mission"
+    shutil.copytree(HOSPITAL, mission)
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        run = subprocess.run([sys.executable, "-m", *command], cwd=mission, stdin=subprocess.DEVNULL,
+                             stdout=write_end, stderr=write_end, timeout=120)
+    finally:
+        os.close(write_end)
+    assert run.returncode == 2

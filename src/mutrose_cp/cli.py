@@ -23,7 +23,8 @@ from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files
 from .output_file import refuse_unsafe_outputs, written_together
-from .process import Failure, command_settings, exit_process, failure_lines, failure_problems, failure_status, usable_stderr
+from .process import (Failure, command_settings, exit_process, failure_lines, failure_problems, failure_status,
+                      reader_gone, usable_stderr)
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
 
@@ -636,7 +637,10 @@ def entry() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     with command_settings():
-        return _main(argv)
+        try:
+            return _main(argv)
+        except BrokenPipeError:  # telling why failed too: stderr is the closed pipe (2>&1 | head)
+            return reader_gone()
 
 
 def _main(argv: Sequence[str] | None) -> int:

@@ -39,7 +39,8 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .output_file import refuse_unsafe_outputs
-from .process import Failure, command_settings, exit_process, failure_lines, failure_status, usable_stderr
+from .process import (Failure, command_settings, exit_process, failure_lines, failure_status, reader_gone,
+                      usable_stderr)
 from .solve.decompose import Algorithm, DecompositionRequest
 
 if TYPE_CHECKING:  # imported when the command runs
@@ -205,7 +206,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             return _command(sys.argv[1:] if argv is None else list(argv))
         except BrokenPipeError:
-            return _stdout_closed()
+            return reader_gone()
 
 
 def _command(argv: list[str]) -> int:
@@ -222,16 +223,6 @@ def _command(argv: list[str]) -> int:
         raise
     except (Interrupted, MissionError, RecursionError, OSError) as err:
         return _report(err)
-
-
-def _stdout_closed() -> int:
-    """The reader of stdout went away (``mutrose … -p | head``): say so on stderr, and send
-    what is left to print nowhere, so that the exit does not fail a second time."""
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, sys.stdout.fileno())
-    os.close(devnull)
-    print("error: standard output: the reader closed the pipe; the output was not written", file=sys.stderr)
-    return 2
 
 
 def entry() -> None:

@@ -87,3 +87,22 @@ def failure_lines(err: Failure) -> list[str]:
 def failure_status(err: Failure) -> int:
     """The exit status of a failed command: the error's own, else 2 (invalid input)."""
     return err.exit_code if isinstance(err, (Interrupted, MissionError)) else 2
+
+
+def _to_devnull(fd: int) -> None:
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+
+
+def reader_gone() -> int:
+    """The reader of stdout went away (``… | head``): say so on stderr while it has a reader
+    (``2>&1 | head`` closes both), send whatever is left to print nowhere, so that the exit does
+    not fail a second time with a traceback; status 2."""
+    _to_devnull(sys.stdout.fileno())
+    try:
+        print("error: standard output: the reader closed the pipe; the output was not written", file=sys.stderr)
+        sys.stderr.flush()
+    except OSError:
+        _to_devnull(sys.stderr.fileno())
+    return 2
