@@ -196,6 +196,8 @@ def test_a_missing_robot_number_is_named(tmp_path, capsys):
     ('{"robots": [{"name": "r1", "capabilities": []}],\n "travel": {"coordinates": {"Dock": [1]}}}',
      ":2:37: travel.coordinates.Dock: expected a point [x, y]"),
     ('{"robots": [}', ":1:13: invalid JSON"),
+    ('{"robots": [{"name": "r1", "capabilities": [],\n   "name": "r2"}]}',
+     ":2:4: robots[0].name: the key 'name' is given twice"),
     ('{"robots": [{"name": "NaN \\"r1", "capabilities": [],\n   "speed": NaN}]}',
      ":2:13: invalid JSON: NaN is not a JSON number"),
     ('{"robots": []}', ":1:12: robots: expected a non-empty list of robots"),

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
 from ..errors import MissionError, Problem, closest
-from ..io.located_json import LocatedJson, Path, parse_located_json, read_located_json
+from ..io.located_json import LocatedJson, Path, parse_located_json, path_text, read_located_json
 
 METRICS = ("euclidean", "manhattan")
 MAX_DURATION = 10**6  # per action: a schedule's times stay far inside CP-SAT's 64-bit range
@@ -100,13 +100,6 @@ class Fleet:
         return self.document.at(path, key=key) if self.document is not None else self.source
 
 
-def _path_text(path: Path) -> str:
-    text = ""
-    for part in path:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
-    return text
-
-
 class _Reader:
     """Validates the decoded document and collects every problem, located."""
 
@@ -116,7 +109,7 @@ class _Reader:
 
     def problem(self, path: Path, message: str, hint: str = "", *, key: bool = False) -> None:
         where = self.doc.at(path, key=key)
-        self.problems.append(Problem(where, f"{_path_text(path)}: {message}" if path else message, hint))
+        self.problems.append(Problem(where, f"{path_text(path)}: {message}" if path else message, hint))
 
     # -- shapes -------------------------------------------------------------------------------
 
