@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import re
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
@@ -186,6 +187,8 @@ def test_a_missing_robot_number_is_named(tmp_path, capsys):
      ":2:16: durations.defualt: unknown key 'defualt'. Did you mean 'default'?"),
     ('{"robots": [{"name": "r1", "capabilities": ["navigation"],\n   "speed": -1}]}',
      ":2:13: robots[0].speed: -1 is out of range"),
+    ('{"robots": [{"name": "r1", "capabilities": ["navigation"],\n   "speed": 1e-300}]}',
+     ":2:13: robots[0].speed: 1e-300 is out of range: give a number from 0.001 to 1e+06"),
     ('{"robots": [{"name": "r1", "capabilities": []},\n {"name": "r1", "capabilities": []}]}',
      ":2:11: robots[1].name: robot 'r1' is listed twice"),
     ('{"robots": [{"name": "r1", "capabilities": []}], "durations": {"actions": {"navigate": 1.5}}}',
@@ -193,6 +196,10 @@ def test_a_missing_robot_number_is_named(tmp_path, capsys):
     ('{"robots": [{"name": "r1", "capabilities": []}],\n "travel": {"coordinates": {"Dock": [1]}}}',
      ":2:37: travel.coordinates.Dock: expected a point [x, y]"),
     ('{"robots": [}', ":1:13: invalid JSON"),
+    ('{"robots": [{"name": "r1", "capabilities": [],\n   "name": "r2"}]}',
+     ":2:4: robots[0].name: the key 'name' is given twice"),
+    ('{"robots": [{"name": "NaN \\"r1", "capabilities": [],\n   "speed": NaN}]}',
+     ":2:13: invalid JSON: NaN is not a JSON number"),
     ('{"robots": []}', ":1:12: robots: expected a non-empty list of robots"),
 ])
 def test_fleet_file_errors_are_located(tmp_path, capsys, text, expected):
@@ -228,6 +235,23 @@ def test_check_names_fleet_names_the_mission_does_not_know(tmp_path, capsys):
     assert main(["check", str(DELIVERY), "--fleet", str(FLEET), "-q"]) == 0
 
 
+def test_a_misspelt_place_of_the_travel_table_is_named(tmp_path, capsys):
+    """A place only the table names, where no robot starts, on a single road, changes no time:
+    a misspelt place, whose intended entry would silently be left out.  A junction (two roads)
+    is a place of the road network."""
+    data = json.loads(FLEET.read_text())
+    data["travel"]["times"] = {"Dock": {"WardAA": 4}}
+    fleet = write_fleet(tmp_path, data)
+    assert main(["check", str(DELIVERY), "--fleet", str(fleet), "-q"]) == 2
+    err = capsys.readouterr().err
+    line = next(i for i, text in enumerate(fleet.read_text().splitlines(), 1) if '"WardAA"' in text)
+    column = fleet.read_text().splitlines()[line - 1].index('"WardAA"') + 1
+    assert f"{fleet}:{line}:{column}: unknown place 'WardAA': not a world location" in err
+    assert "Did you mean 'WardA'?" in err
+    data["travel"]["times"] = {"Dock": {"Junction": 4}, "Junction": {"WardA": 3}}
+    assert main(["check", str(DELIVERY), "--fleet", str(write_fleet(tmp_path, data)), "-q"]) == 0
+
+
 def test_a_task_place_without_coordinates_is_located_in_the_world(mission, tmp_path, capsys):
     world = mission / "knowledge" / "world_db.xml"
     world.write_text(world.read_text().replace(" <x>30</x> <y>40</y>", "", 1))  # WardB
@@ -244,13 +268,36 @@ def test_bad_world_coordinates_are_located(mission, tmp_path, capsys):
     assert main(["check", str(mission), "--fleet", str(FLEET), "-q"]) == 2
     err = capsys.readouterr().err
     assert f"{world}:" in err and "location SupplyRoom: x must be a number, got 'east'" in err
+    world.write_text(world.read_text().replace("<x>east</x>", "<x>1e300</x>", 1))  # trip times of 300 digits
+    assert main(["allocate", str(mission), "--fleet", str(FLEET), "-q", "-o", str(tmp_path / "o.json")]) == 2
+    err = capsys.readouterr().err
+    assert f"{world}:20: location SupplyRoom: x 1e300 is out of range: give a number from -1e+09 to 1e+09" in err
 
 
 def test_bad_options_are_usage_errors(tmp_path, capsys):
     status, out, _ = allocate(tmp_path, DELIVERY, FLEET, "--objective", "fastest")
     assert status == 2 and "unknown objective 'fastest'" in capsys.readouterr().err and not out.exists()
     status, _, _ = allocate(tmp_path, DELIVERY, FLEET, "--gantt", str(tmp_path / "chart.pdf"))
-    assert status == 2 and "PNG or SVG" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert status == 2 and "--gantt: cannot tell the chart's format from" in err and "name a .png or .svg file" in err
+
+
+
+@pytest.mark.parametrize("option,value,message", [
+    ("--seed", str(2**40), "--seed: 1099511627776 is out of range: give a number from 0 to 2147483647"),
+    ("--workers", "100000", "--workers: 100000 is out of range: give a number from 1 to 256"),
+])
+def test_solver_options_beyond_cp_sat_are_usage_errors(tmp_path, capsys, option, value, message):
+    """CP-SAT takes a 32-bit seed (a larger one was a TypeError inside it) and fails at once with
+    tens of thousands of threads (which read as a timeout)."""
+    status, out, _ = allocate(tmp_path, DELIVERY, FLEET, option, value)
+    err = capsys.readouterr().err
+    assert status == 2 and message in err and "Traceback" not in err and not out.exists()
+    from mutrose_cp.allocate import AllocationOptions
+    from mutrose_cp.errors import MissionError
+
+    with pytest.raises(MissionError, match="out of range"):
+        AllocationOptions(**{option.lstrip("-"): int(value)})
 
 
 # ----------------------------------------------------------------------------------------------
@@ -265,6 +312,16 @@ def test_gantt_chart(tmp_path, suffix):
     assert status == 0
     head = chart.read_bytes()[:200]
     assert head.startswith(b"\x89PNG") if suffix == ".png" else b"<svg" in head or b"<?xml" in head
+    again = tmp_path / f"again{suffix}"
+    assert allocate(tmp_path, DELIVERY, FLEET, "--gantt", str(again), name="again")[0] == 0
+    assert again.read_bytes() == chart.read_bytes()  # no date, no version, fixed ids
+
+
+def test_gantt_without_matplotlib_is_refused_before_the_search(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed
+    status, out, schedule = allocate(tmp_path, DELIVERY, FLEET, "--gantt", str(tmp_path / "chart.png"))
+    assert status == 2 and "--gantt needs matplotlib, which is not installed" in capsys.readouterr().err
+    assert not out.exists() and not schedule.exists()
 
 
 def test_the_example_script_runs(capsys):

@@ -21,6 +21,7 @@ import pytest
 
 from conftest import REFERENCE, require_reference
 from mutrose_cp.cli import main
+from mutrose_cp.interrupt import FAULT_ENV
 from mutrose_cp.io.config import load_configuration
 from mutrose_cp.io.decomposition_output import load_decomposition_output
 
@@ -265,6 +266,16 @@ def test_an_interrupted_compare_leaves_no_run_behind(tmp_path, reference):
         assert not _alive(pid)
 
 
+@pytest.mark.parametrize("sig", ["INT", "TERM"])
+def test_an_interrupt_names_the_run_and_leaves_no_temporary_folder(tmp_path, sig):
+    env = {**os.environ, "PYTHONPATH": str(SRC), "TMPDIR": str(tmp_path), FAULT_ENV: f"running exploratory:{sig}"}
+    proc = subprocess.run([sys.executable, "-m", "mutrose_cp", "compare", str(HOSPITAL), "-q"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 128 + signal.Signals["SIG" + sig]
+    assert f"interrupted while running exploratory (SIG{sig})" in proc.stderr and proc.stdout == ""
+    assert list(tmp_path.iterdir()) == []
+
+
 # ---------------------------------------------------------------------------------------------
 # plots and bad input
 
@@ -308,6 +319,7 @@ def test_plot_without_matplotlib_is_a_clear_error(monkeypatch, tmp_path, capsys)
     (["--plot", "chart.txt"], "cannot tell the chart's format from 'chart.txt'"),
     (["--original", "/nonexistent/MutroseMissionDecomposer"], "--original: not an executable file"),
     (["--time-limit", "0"], "0 is not a positive number of seconds"),
+    (["--time-limit", "1e8"], "1e8 is out of range: give at most 10000000 seconds"),
     (["--time-limit", "soon"], "expected a number of seconds, got 'soon'"),
 ])
 def test_bad_options_exit_2(capsys, args, message):

@@ -43,3 +43,29 @@ def test_readme_example_runs(monkeypatch, capsys):
     exec(compile(block, "README.md", "exec"), {})  # noqa: S102 - our own documentation
     total, cost, chosen = capsys.readouterr().out.split(" ", 2)
     assert total == "36" and int(cost) > 0 and chosen.startswith("['AT")
+
+
+def test_guide_allocation_runs_as_written(tmp_path, capsys):
+    """Section 8 of the guide: its fleet, on the guide's mission with the wards' coordinates the
+    text gives, allocates as the summary line it shows (a fleet the mission cannot use was
+    published once: unknown capabilities, no lab robots)."""
+    import json
+    import shutil
+
+    from mutrose_cp.cli import main
+
+    guide = (ROOT / "docs" / "guide.md").read_text(encoding="utf-8")
+    section = guide[guide.index("## 8. Allocate it to a fleet"):guide.index("## 9.")]
+    fleet = json.loads(re.search(r"```json\n(.*?)```", section, flags=re.S).group(1))
+    shown = re.search(r"^allocated: .*? robots", section, flags=re.M).group(0)
+    mission = tmp_path / "lab-samples"
+    shutil.copytree(ROOT / "docs" / "guide-mission", mission)
+    world = mission / "knowledge" / "world_db.xml"
+    text = world.read_text(encoding="utf-8")
+    for ward, (x, y) in {"Ward1": (0, 40), "Ward2": (30, 40), "Ward3": (60, 40)}.items():
+        assert f"<x>{x}</x> <y>{y}</y>" in section  # the coordinates the text gives
+        text = text.replace(f"<name>{ward}</name>", f"<name>{ward}</name> <x>{x}</x> <y>{y}</y>", 1)
+    world.write_text(text, encoding="utf-8")
+    (tmp_path / "fleet.json").write_text(json.dumps(fleet), encoding="utf-8")
+    assert main(["allocate", str(mission), "--fleet", str(tmp_path / "fleet.json"), "-o", str(tmp_path / "o.json")]) == 0
+    assert capsys.readouterr().err.startswith(shown)

@@ -8,14 +8,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import shutil
 import signal
 import sys
 import time
 from collections import Counter
 from pathlib import Path
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from . import __version__
 from .batch.command import add_batch_parser
@@ -24,7 +23,9 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files, world_file
-from .process import command_settings, exit_process, usable_stderr
+from .output_file import refuse_unsafe_outputs, written_together
+from .process import (Failure, command_settings, exit_process, failure_lines, failure_problems, failure_status,
+                      reader_gone, usable_stderr)
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
 
@@ -157,18 +158,16 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     objective = Objective.parse(args.objective)
     if args.gantt:
-        from .allocate.gantt import gantt_format, matplotlib_ready
+        from .allocate.gantt import gantt_format
 
-        gantt_format(args.gantt)
-        matplotlib_ready()
+        gantt_format(args.gantt)  # and matplotlib, before any work
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     _warn(args, mission)
     fleet = Fleet.read(args.fleet)
     _check_fleet(mission, fleet)
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     schedule_path = Path(args.schedule) if args.schedule else out_path.with_name("schedule.json")
-    for path in (out_path, schedule_path, *([Path(args.gantt)] if args.gantt else [])):
-        _refuse_inputs_as_output(path, mission, (hddl, gm, cfg, Path(args.fleet)))
+    _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
     options = AllocationOptions(objective, args.time_limit, args.workers, args.seed)
     progress = _AllocationProgress(not args.quiet, objective.name)
     try:
@@ -176,7 +175,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
             allocation = mission.allocate(fleet, options, progress)
     finally:
         progress.close()
-    with phase("writing the output"):
+    with phase("writing the output"), written_together((schedule_path, out_path, args.gantt)):
         write_schedule(allocation, schedule_path)
         write_decomposition(allocation, out_path, args.format or mission.config.output.file_type)
         if args.gantt:
@@ -325,7 +324,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     if args.json_style == "standard" and file_type != "json":
         raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
                            "drop --json-style or write JSON (--format json)")
-    _refuse_inputs_as_output(out_path if not args.ihtn else None, mission, (hddl, gm, cfg))
+    _refuse_inputs_as_output((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg))
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
                         space=section)
     if args.ihtn:
@@ -406,24 +405,11 @@ def _warn(args: argparse.Namespace, mission: Mission) -> None:
             print(f"warning: {w}", file=sys.stderr)
 
 
-def _refuse_inputs_as_output(out_path: Path | None, mission: Mission, inputs: tuple[Path, ...]) -> None:
-    """An output that is one of the mission's inputs (the same file, after links, by device and
-    inode) would destroy it: refuse before anything is computed or written."""
-    if out_path is None or str(out_path) == "-":
-        return
-    try:
-        target = os.stat(out_path)
-    except OSError:
-        return  # a new file cannot be an input
-    world = mission.world_path
-    for path in (*inputs, *([world] if world is not None else [])):
-        try:
-            st = os.stat(path)
-        except OSError:
-            continue
-        if (st.st_dev, st.st_ino) == (target.st_dev, target.st_ino):
-            raise MissionError(f"the output would overwrite the input {path}: choose another output file",
-                               str(out_path))
+def _refuse_inputs_as_output(outputs: Sequence[Path | str | None], mission: Mission,
+                             inputs: tuple[Path, ...]) -> None:
+    """Outputs that are inputs of the mission (the world included) or one another, or folders:
+    refused before anything is computed or written (``output_file.refuse_unsafe_outputs``)."""
+    refuse_unsafe_outputs(outputs, (*inputs, mission.world_path))
 
 
 def cmd_count(args: argparse.Namespace) -> int:
@@ -456,6 +442,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = _inputs(args)
     if args.plot:
         plot_format(args.plot)  # before anything runs
+        refuse_unsafe_outputs((args.plot,), (hddl, gm, cfg))
     original = None
     if args.original:
         found = shutil.which(args.original)
@@ -475,36 +462,39 @@ def cmd_compare(args: argparse.Namespace) -> int:
 MAX_COUNT = 2**62  # beyond any listing that fits on a disk; CP-SAT's limits are 64-bit
 
 
-def _count_option(minimum: int):
-    """An argparse type: an integer from ``minimum`` to ``MAX_COUNT`` (a usage error, exit 2,
+def _count_option(minimum: int, maximum: int = MAX_COUNT) -> Callable[[str], int]:
+    """An argparse type: an integer from ``minimum`` to ``maximum`` (a usage error, exit 2,
     otherwise)."""
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if not minimum <= value <= MAX_COUNT:
-            raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {MAX_COUNT}")
+        if not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {maximum}")
         return value
     return parse
 
 
+MAX_SECONDS = 10**7  # about 115 days: any longer limit is a typo
+
+
 def _seconds(text: str) -> float:
-    """An argparse type: a positive number of seconds."""
+    """An argparse type: a positive number of seconds, at most ``MAX_SECONDS``."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
-
-
-    if not 0 < value <= 10**7:
-        raise argparse.ArgumentTypeError(f"{text} is out of range: give a number of seconds above 0")
+    if value > MAX_SECONDS:
+        raise argparse.ArgumentTypeError(f"{text} is out of range: give at most {MAX_SECONDS} seconds")
     return value
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .allocate.options import MAX_SEED, MAX_WORKERS
+
     parser = argparse.ArgumentParser(
         prog="mutrose-cp",
         description="Decompose MutRoSe multi-robot missions (goal model + HDDL + configuration + world).",
@@ -531,8 +521,6 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
     common(p)
     p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
-
-
     p.add_argument("--fleet", metavar="FLEET.json", help="also check a fleet file against the mission")
     p.set_defaults(func=cmd_check)
 
@@ -575,9 +563,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="minimise the makespan (default), the total travel, or A * makespan + B * travel")
     p.add_argument("--time-limit", type=_seconds, default=10.0, metavar="S",
                    help="stop the search after S seconds with the best schedule found (default 10)")
-    p.add_argument("--workers", type=_count_option(1), default=1, metavar="N",
+    p.add_argument("--workers", type=_count_option(1, MAX_WORKERS), default=1, metavar="N",
                    help="CP-SAT search threads (default 1: the same schedule on every finished run)")
-    p.add_argument("--seed", type=_count_option(0), default=0, help="CP-SAT random seed (default 0)")
+    p.add_argument("--seed", type=_count_option(0, MAX_SEED), default=0, help="CP-SAT random seed (default 0)")
     p.set_defaults(func=cmd_allocate)
 
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
@@ -654,7 +642,10 @@ def entry() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     with command_settings():
-        return _main(argv)
+        try:
+            return _main(argv)
+        except BrokenPipeError:  # telling why failed too: stderr is the closed pipe (2>&1 | head)
+            return reader_gone()
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -683,32 +674,16 @@ def _main(argv: Sequence[str] | None) -> int:
         return status
 
 
-def _problems(err: Interrupted | MissionError | RecursionError | OSError) -> list[dict[str, str | int | None]]:
+def _problems(err: Failure) -> list[dict[str, str | int | None]]:
     """Why a command failed, as the records ``--json-summary`` lists."""
-    if isinstance(err, MissionError):
-        return [p.record() for p in err.problems]
-    if isinstance(err, OSError):
-        return [Problem(str(err.filename or ""), err.strerror or str(err)).record()]
-    if isinstance(err, Interrupted):
-        return [Problem("", f"interrupted{' while ' + err.during if err.during else ''} ({err})").record()]
-    return [Problem("", "the mission is nested too deeply to process").record()]
+    return [p.record() for p in failure_problems(err)]
 
 
-def _report(err: Interrupted | MissionError | RecursionError | OSError) -> int:
+def _report(err: Failure) -> int:
     """Print why a command stopped (never a traceback) and return its exit status."""
-    match err:
-        case Interrupted(during=during):
-            print(f"interrupted{' while ' + during if during else ''} ({err}): no output was written", file=sys.stderr)
-            return err.exit_code
-        case MissionError(problems=problems):
-            for problem in problems:
-                print(f"error: {problem}", file=sys.stderr)
-            if len(problems) > 1:
-                print(f"{len(problems)} problems found", file=sys.stderr)
-            return err.exit_code
-        case RecursionError():
-            print("error: the mission is nested too deeply to process", file=sys.stderr)
-            return 2
-        case OSError():
-            print(f"error: {err.filename or ''}: {err.strerror or err}", file=sys.stderr)
-            return 2
+    lines = failure_lines(err)
+    for line in lines:
+        print(line, file=sys.stderr)
+    if isinstance(err, MissionError) and len(lines) > 1:
+        print(f"{len(lines)} problems found", file=sys.stderr)
+    return failure_status(err)

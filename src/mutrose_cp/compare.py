@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Callable
 
 from .errors import MissionError, Problem
+from .interrupt import phase
 from .io.config import load_configuration
 from .io.decomposition_output import load_decomposition_output
 from .measure import Measurement, run_measured
@@ -239,8 +240,9 @@ def compare(request: CompareRequest, progress: Callable[[str], None] | None = No
     with tempfile.TemporaryDirectory(prefix="mutrose-cp-compare-") as tmp:
         for decomposer in ("cpsat", "exploratory", *(("original",) if request.original else ())):
             say(f"{decomposer}: running (time limit {request.time_limit:g} s)")
-            run = run_original(request, Path(tmp)) if decomposer == "original" else \
-                run_ours(request, decomposer, Path(tmp))
+            with phase(f"running {decomposer}"):  # named by an interrupt's message
+                run = run_original(request, Path(tmp)) if decomposer == "original" else \
+                    run_ours(request, decomposer, Path(tmp))
             say(f"{decomposer}: {run.status} in {run.seconds:.2f} s, {run.peak_mb:.1f} MB")
             runs.append(run)
     finished = [r for r in runs if r.status == FINISHED]

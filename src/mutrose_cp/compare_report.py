@@ -3,22 +3,18 @@
 The table has one row per decomposer (status, wall time, peak memory, number of valid mission
 decompositions, whether it agrees with the reference run), then the runs that did not finish
 and, for each run that disagrees, its first differences in task ids.  The chart needs
-matplotlib (the ``bench`` extra), imported only when a chart is asked for.
+matplotlib (the ``bench`` extra, :mod:`mutrose_cp.charts`).
 """
 from __future__ import annotations
 
-import io
-from pathlib import Path
 from typing import Any, Sequence
 
+from .charts import chart_format, figure, save_chart
 from .compare import FINISHED, TIMED_OUT, CompareReport, Comparison, Run
-from .errors import MissionError
 from .output_compare import nearest
-from .output_file import atomic_writer
 
 SHOWN = 5  # differences of each kind in the table
 LISTED = 40  # differences of each kind in the JSON object
-PLOT_FORMATS = ("png", "svg", "pdf")
 
 
 def _count(n: int | None) -> str:
@@ -184,16 +180,7 @@ def report_json(report: CompareReport) -> dict[str, Any]:
 def plot_format(path: str) -> str:
     """The chart's format from the file suffix; checked, with matplotlib's presence, before any
     decomposer runs."""
-    suffix = Path(path).suffix.lower().lstrip(".")
-    if suffix not in PLOT_FORMATS:
-        raise MissionError(f"--plot: cannot tell the chart's format from {path!r}: name a .png, .svg or .pdf file",
-                           path)
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError:
-        raise MissionError("--plot needs matplotlib, which is not installed: pip install 'mutrose-cp[bench]' "
-                           "(or pip install matplotlib)", path) from None
-    return suffix
+    return chart_format(path, "--plot")
 
 
 def write_plot(report: CompareReport, path: str) -> None:
@@ -201,13 +188,10 @@ def write_plot(report: CompareReport, path: str) -> None:
     out or failed is hatched and labelled so.  Written atomically; the same report gives the same
     bytes (no creation date in SVG or PDF)."""
     fmt = plot_format(path)
-    import matplotlib
-    from matplotlib.figure import Figure  # no pyplot: no global state, no display needed
-
     names = [r.decomposer for r in report.runs]
-    figure = Figure(figsize=(8, 3.6), layout="constrained")
-    figure.suptitle(f"{report.request.config.name}: {_verdict(report)}", fontsize=9)
-    for axes, values, title, unit in zip(figure.subplots(1, 2), ([r.seconds for r in report.runs],
+    chart = figure(figsize=(8, 3.6), layout="constrained")
+    chart.suptitle(f"{report.request.config.name}: {_verdict(report)}", fontsize=9)
+    for axes, values, title, unit in zip(chart.subplots(1, 2), ([r.seconds for r in report.runs],
                                                                  [r.peak_mb for r in report.runs]),
                                          ("wall time (s)", "peak memory (MB)"), ("s", "MB")):
         bars = axes.bar(names, values, color=["#4c72b0" if r.status == FINISHED else "#bbbbbb" for r in report.runs])
@@ -218,9 +202,4 @@ def write_plot(report: CompareReport, path: str) -> None:
                                      for v, r in zip(values, report.runs)], fontsize=8)
         axes.set_title(title)
         axes.margins(y=0.15)
-    metadata = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt, {})
-    buffer = io.BytesIO()
-    with matplotlib.rc_context({"svg.hashsalt": "mutrose-cp"}):
-        figure.savefig(buffer, format=fmt, metadata=metadata)
-    with atomic_writer(path, "wb") as fh:
-        fh.write(buffer.getvalue())
+    save_chart(chart, path, fmt)

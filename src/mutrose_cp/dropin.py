@@ -31,15 +31,21 @@ import signal
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Mapping, Sequence
+from typing import IO, TYPE_CHECKING, Mapping, Sequence
 
 from . import console
 from .errors import MissionError
 from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import Interrupted, phase, signal_handlers
 from .io.text import MB, input_limit
-from .process import command_settings, exit_process, usable_stderr
+from .output_file import refuse_unsafe_outputs
+from .process import (Failure, command_settings, exit_process, failure_lines, failure_status, reader_gone,
+                      usable_stderr)
 from .solve.decompose import Algorithm, DecompositionRequest
+
+if TYPE_CHECKING:  # imported when the command runs
+    from .mission import Mission
+    from .output import OutputModel
 
 ALGORITHM_ENV = "MUTROSE_ALGORITHM"
 IHTN_FOLDER = Path("ihtn")
@@ -127,6 +133,8 @@ def run(inv: Invocation, out: IO[str] | None = None) -> int:
     mission = Mission.load(hddl, gm, cfg, lenient_xml=True)  # the original repairs XML silently
     for warning in (*mission.warnings, *mission.initial_state.warnings):
         print(f"warning: {warning}", file=sys.stderr)
+    # the original would overwrite an input named as its output: refused, before any work
+    refuse_unsafe_outputs((None if inv.ihtn else mission.output_path(),), (*inv.files, mission.world_path))
     with phase("expanding the mission"):
         tg, constraints = mission.task_graph, mission.constraints
     if inv.verbose:
@@ -159,7 +167,7 @@ def _every_decomposition(algorithm: Algorithm) -> DecompositionRequest:
     return DecompositionRequest(algorithm=algorithm, limit=None)
 
 
-def _trace_mission(mission, out) -> None:
+def _trace_mission(mission: Mission, out: IO[str]) -> None:
     """``-v``: the inputs and every stage up to the Task Graph."""
     files = {"domain": mission.domain.source, "goal model": mission.goal_model.source,
              "configuration": str(mission.config_path), "world": str(mission.world_path or "")}
@@ -170,33 +178,23 @@ def _trace_mission(mission, out) -> None:
     console.print_task_graph(mission.task_graph, out)
 
 
-def _write_ihtns(model, maximum: int) -> None:
+def _write_ihtns(model: OutputModel, maximum: int) -> None:
     from .ihtn import refuse_oversized_export, write_ihtns
 
     with phase("counting iHTN files"):
-        refuse_oversized_export(model, False, maximum, str(IHTN_FOLDER))
+        refuse_oversized_export(model, False, maximum, str(IHTN_FOLDER), "raise the bound with --ihtn-max=N "
+                                "(-h writes every ordering of every valid decomposition), or use mutrose-cp "
+                                f"decompose --ihtn {IHTN_FOLDER} --ihtn-orderings one")
     with phase("exporting iHTNs"):
         write_ihtns(model, IHTN_FOLDER)
 
 
-def _report(err: BaseException) -> int:
+def _report(err: Failure) -> int:
     """Why the command stopped, on stdout as the original prints its messages (the plug-in
     shows stdout), and the exit status."""
-    match err:
-        case Interrupted(during=during):
-            print(f"interrupted{' while ' + during if during else ''} ({err}): no output was written")
-            return err.exit_code
-        case MissionError(problems=problems):
-            for problem in problems:
-                print(f"error: {problem}")
-            return err.exit_code
-        case RecursionError():
-            print("error: the mission is nested too deeply to process")
-            return 2
-        case OSError():
-            print(f"error: {err.filename or ''}: {err.strerror or err}")
-            return 2
-    raise err
+    for line in failure_lines(err):
+        print(line)
+    return failure_status(err)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -208,7 +206,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             return _command(sys.argv[1:] if argv is None else list(argv))
         except BrokenPipeError:
-            return _stdout_closed()
+            return reader_gone()
 
 
 def _command(argv: list[str]) -> int:
@@ -225,16 +223,6 @@ def _command(argv: list[str]) -> int:
         raise
     except (Interrupted, MissionError, RecursionError, OSError) as err:
         return _report(err)
-
-
-def _stdout_closed() -> int:
-    """The reader of stdout went away (``mutrose … -p | head``): say so on stderr, and send
-    what is left to print nowhere, so that the exit does not fail a second time."""
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, sys.stdout.fileno())
-    os.close(devnull)
-    print("error: standard output: the reader closed the pipe; the output was not written", file=sys.stderr)
-    return 2
 
 
 def entry() -> None:

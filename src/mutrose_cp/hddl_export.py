@@ -9,7 +9,6 @@ succeeds, unless ``--problem-out`` asked for the problem explicitly (exit 2).
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -18,7 +17,7 @@ from .hddl_problem import ProblemNotExpressible, mission_problem
 from .io.hddl import load_domain
 from .io.hddl_writer import HddlExport
 from .mission import Mission, find_mission_files
-from .output_file import atomic_writer
+from .output_file import atomic_writer, refuse_unsafe_outputs, written_together
 
 
 def _mission_files(args: argparse.Namespace) -> tuple[Path, tuple[Path, Path] | None]:
@@ -43,20 +42,22 @@ def _problem_path(args: argparse.Namespace) -> Path:
     return out.with_name(f"{out.stem}-problem{out.suffix or '.hddl'}")
 
 
-def _refuse_overwriting(target: Path, inputs: list[Path]) -> None:
-    """An output that is one of the inputs would destroy it: refuse before writing."""
-    for path in inputs:
-        try:
-            if os.path.samefile(target, path):
-                raise MissionError(f"the output would overwrite the input {path}: choose another output file",
-                                   str(target))
-        except OSError:
-            continue
-
-
-def _write(path: Path, text: str) -> None:
-    with atomic_writer(path) as out:
-        out.write(text)
+def _texts(args: argparse.Namespace, export: HddlExport, mission: Mission | None) -> list[str]:
+    """The domain's text, then the problem's when the mission has one: all made before anything
+    is written, so that a refused problem (``--problem-out``) leaves no domain file behind."""
+    texts = [export.domain_text()]
+    if mission is None:
+        return texts
+    try:
+        problem, notes = mission_problem(mission)
+    except ProblemNotExpressible as why:
+        if args.problem_out:
+            raise
+        if not args.quiet:
+            print(f"note: no problem file: {why}", file=sys.stderr)
+        return texts
+    export.warnings.extend(notes)
+    return [*texts, export.problem_text(problem)]
 
 
 def export_hddl(args: argparse.Namespace) -> int:
@@ -64,27 +65,19 @@ def export_hddl(args: argparse.Namespace) -> int:
     hddl, mission_files = _mission_files(args)
     if args.problem_out and mission_files is None:
         raise MissionError("--problem-out needs the mission: give --gm GM and --config CONFIG, or a mission folder")
-    inputs = [hddl, *(mission_files or ())]
     outputs = [Path(args.output), *([_problem_path(args)] if mission_files else [])]
-    for target in outputs:
-        _refuse_overwriting(target, inputs)
+    refuse_unsafe_outputs(outputs, [hddl, *(mission_files or ())])
     mission = Mission.load(hddl, *mission_files, lenient_xml=args.lenient_xml) if mission_files else None
-    domain = mission.domain if mission is not None else load_domain(hddl)
-    export = HddlExport(domain)
-    _write(Path(args.output), export.domain_text())
-    written = [f"domain {args.output}"]
     if mission is not None:
-        try:
-            problem, notes = mission_problem(mission)
-        except ProblemNotExpressible as why:
-            if args.problem_out:
-                raise
-            if not args.quiet:
-                print(f"note: no problem file: {why}", file=sys.stderr)
-        else:
-            export.warnings.extend(notes)
-            _write(outputs[1], export.problem_text(problem))
-            written.append(f"problem {outputs[1]}")
+        refuse_unsafe_outputs(outputs, [mission.world_path])
+    export = HddlExport(mission.domain if mission is not None else load_domain(hddl))
+    written = []
+    texts = _texts(args, export, mission)
+    with written_together(outputs[:len(texts)]):
+        for what, path, text in zip(("domain", "problem"), outputs, texts):
+            with atomic_writer(path) as out:
+                out.write(text)
+            written.append(f"{what} {path}")
     if not args.quiet:
         for warning in export.warnings:
             print(f"warning: {warning}", file=sys.stderr)

@@ -21,6 +21,7 @@ from .errors import MissionError
 from .htn import TreeNode
 from .model.task_graph import Decomposition
 from .output import OutputModel, Tree, write_boost_json
+from .output_file import write_failure
 
 
 def _orderings(members: list[int], succ: dict[int, set[int]]) -> Iterator[list[int]]:
@@ -251,15 +252,20 @@ def ihtn_file_count(model: OutputModel, one_per_decomposition: bool, cap: int, b
 DEFAULT_MAX_FILES = 10_000  # an export of more files is refused before anything is written
 
 
-def refuse_oversized_export(model: OutputModel, one_per_decomposition: bool, maximum: int, folder: str) -> int:
+REMEDIES = ("write the first ordering of each with --ihtn-orderings one, list fewer decompositions (--limit K, "
+            "--optimize), or raise --ihtn-max")  # the options of ``mutrose-cp decompose``
+
+
+def refuse_oversized_export(model: OutputModel, one_per_decomposition: bool, maximum: int, folder: str,
+                            remedies: str = REMEDIES) -> int:
     """The number of files the export will write; a :class:`MissionError` (located at
-    ``folder``) when that is more than ``maximum``, saying how many and what to do instead."""
+    ``folder``) when that is more than ``maximum``, saying how many and what to do instead
+    (``remedies``: the options of the command that asked)."""
     files = ihtn_file_count(model, one_per_decomposition, maximum + 1)
     if files > maximum:
         raise MissionError(f"the iHTN export would write {_how_many_files(model, one_per_decomposition, maximum)}, "
                            f"over --ihtn-max {maximum}; one file is written per ordering of each listed "
-                           "decomposition: write the first ordering of each with --ihtn-orderings one, list fewer "
-                           "decompositions (--limit K, --optimize), or raise --ihtn-max", folder)
+                           f"decomposition: {remedies}", folder)
     return files
 
 
@@ -287,9 +293,33 @@ def write_ihtns(model: OutputModel, folder: Path, progress: Callable[[int], None
     The files are built in a temporary folder beside ``folder`` and then moved in under a lock,
     with SIGINT and SIGTERM held back for those few renames; old ``ihtn_<n>.json`` files that
     the new export does not replace are removed.  No other file of ``folder`` is touched, and
-    two concurrent exports leave the whole result of one of them."""
+    two concurrent exports leave the whole result of one of them.  A failed or interrupted
+    export leaves no folder it created; a write error (a full disk) is located at ``folder``."""
+    if folder.exists() and not folder.is_dir():
+        raise MissionError("cannot write the iHTN files: it is a file; give a folder", str(folder))
+    created = not folder.exists()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        return _export(model, folder, progress, one_per_decomposition)
+    except BaseException as err:
+        if created:
+            _remove_if_empty(folder)
+        if isinstance(err, OSError):
+            raise write_failure(folder, err) from None
+        raise
+
+
+def _remove_if_empty(folder: Path) -> None:
+    try:
+        folder.rmdir()
+    except OSError:  # a concurrent export filled it
+        pass
+
+
+def _export(model: OutputModel, folder: Path, progress: Callable[[int], None] | None,
+            one_per_decomposition: bool) -> int:
+    """Stage the files beside ``folder``, then swap them in (see :func:`write_ihtns`)."""
     succ, ec = _constraint_index(model)
-    folder.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=folder.parent))
     try:
         count = 0

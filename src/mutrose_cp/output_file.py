@@ -7,16 +7,21 @@
 * A character device or a FIFO (``/dev/null``, a named pipe) is written through, never replaced.
 * ``-`` is standard output.
 * Every error names the path the user gave, never the temporary one.
+
+:func:`refuse_unsafe_outputs` checks a command's outputs before it does any work: an output that
+is one of its inputs, two outputs that are one file, an output that is a folder.
+:func:`written_together` makes concurrent runs that write the same set of files write it in turn.
 """
 from __future__ import annotations
 
+import fcntl
 import os
 import stat
 import sys
 import tempfile
 from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
-from typing import IO, Any, Iterator, Literal, overload
+from typing import IO, Any, Iterable, Iterator, Literal, overload
 
 from .errors import MissionError
 
@@ -29,7 +34,8 @@ def _umask() -> int:
     return mask
 
 
-def _failure(path: str | os.PathLike[str], err: OSError) -> MissionError:
+def write_failure(path: str | os.PathLike[str], err: OSError) -> MissionError:
+    """Why an output could not be written, located at the path the user gave."""
     reason = err.strerror or str(err)
     return MissionError(f"cannot write the output: {reason}", os.fspath(path))
 
@@ -77,7 +83,7 @@ def _standard_output(mode: str) -> Iterator[IO[Any]]:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         raise MissionError("cannot write the output: the reader closed the pipe", "standard output") from None
     except OSError as err:
-        raise _failure("standard output", err) from None
+        raise write_failure("standard output", err) from None
 
 
 def _existing(target: Path, path: str | os.PathLike[str]) -> os.stat_result | None:
@@ -88,7 +94,7 @@ def _existing(target: Path, path: str | os.PathLike[str]) -> os.stat_result | No
     except FileNotFoundError:
         return None
     except OSError as err:
-        raise _failure(path, err) from None
+        raise write_failure(path, err) from None
     if stat.S_ISDIR(existing.st_mode):
         raise MissionError("cannot write the output: it is a folder; give a file name", os.fspath(path))
     return existing
@@ -103,7 +109,7 @@ def _written_through(target: Path, path: str | os.PathLike[str], mode: str) -> I
         with open(target, mode, encoding=encoding, newline=newline) as fh:
             yield fh
     except OSError as err:
-        raise _failure(path, err) from None
+        raise write_failure(path, err) from None
 
 
 @contextmanager
@@ -117,7 +123,7 @@ def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     except OSError as err:
-        raise _failure(path, err) from None
+        raise write_failure(path, err) from None
     try:
         os.fchmod(fd, stat.S_IMODE(existing.st_mode) if existing is not None else 0o666 & ~_umask())
         with os.fdopen(fd, mode, encoding=encoding, newline=newline) as fh:
@@ -129,5 +135,68 @@ def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
         except OSError:
             pass
         if isinstance(exc, OSError):
-            raise _failure(path, exc) from None
+            raise write_failure(path, exc) from None
         raise
+
+
+Pathlike = str | os.PathLike[str]
+
+
+def _identity(path: Pathlike) -> tuple[object, ...]:
+    """What makes two paths one file: its device and inode when it exists (links, hard links),
+    else the path with every link of its folders resolved."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return ("new", os.path.realpath(path))
+    return ("file", st.st_dev, st.st_ino)
+
+
+def refuse_unsafe_outputs(outputs: Iterable[Pathlike | None], inputs: Iterable[Pathlike | None]) -> None:
+    """Refuse, before any work, the outputs that would destroy or lose something, each located at
+    the output as the user gave it: one that is an input (it would be overwritten), one that is
+    the same file as an earlier output (the later one would replace it) and one that is a
+    folder.  ``None`` and ``-`` (standard output) are skipped."""
+    read: dict[tuple[object, ...], Pathlike] = {}
+    for path in inputs:
+        if path is not None and os.fspath(path) != STDOUT and os.path.exists(path):
+            read.setdefault(_identity(path), path)
+    written: dict[tuple[object, ...], Pathlike] = {}
+    for path in outputs:
+        if path is None or os.fspath(path) == STDOUT:
+            continue
+        _existing(Path(os.path.realpath(path)), path)  # a folder is refused
+        identity = _identity(path)
+        if identity in read:
+            raise MissionError(f"the output would overwrite the input {os.fspath(read[identity])}: choose another "
+                               "output file", os.fspath(path))
+        if identity in written:
+            raise MissionError(f"the outputs {os.fspath(written[identity])} and {os.fspath(path)} are one file, "
+                               "which the later would replace: give each output a file of its own", os.fspath(path))
+        written[identity] = path
+
+
+@contextmanager
+def written_together(paths: Iterable[Pathlike | None]) -> Iterator[None]:
+    """Hold a lock on the folders of ``paths`` while a command writes them one after the other.
+
+    Each file is replaced atomically anyway; the lock makes two runs that write the same set
+    (``allocate``'s decomposition, schedule and chart; ``export-hddl``'s domain and problem)
+    write it in turn, so the set ends up all from one run, never a mixture.  The folders are
+    the locks (``flock``, in a fixed order): nothing is left behind.  ``None`` and ``-`` are
+    skipped; a folder that cannot be created or opened is left to the write to report."""
+    folders = sorted({os.path.dirname(os.path.realpath(p)) for p in paths if p is not None and os.fspath(p) != STDOUT})
+    held: list[int] = []
+    try:
+        for folder in folders:
+            try:
+                os.makedirs(folder, exist_ok=True)
+                fd = os.open(folder, os.O_RDONLY)
+            except OSError:
+                continue
+            held.append(fd)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        for fd in held:
+            os.close(fd)  # releases the lock

@@ -1,5 +1,6 @@
 """What every command-line front end (``mutrose-cp``, ``mutrose``) does around its command:
-the settings a short-lived decomposition process runs best with, and how it ends."""
+the settings a short-lived decomposition process runs best with, how a failure is told, and
+how the process ends."""
 from __future__ import annotations
 
 import gc
@@ -8,6 +9,11 @@ import signal
 import sys
 from contextlib import contextmanager
 from typing import Iterator
+
+from .errors import MissionError, Problem
+from .interrupt import Interrupted
+
+Failure = Interrupted | MissionError | RecursionError | OSError  # what ends a command without a traceback
 
 
 @contextmanager
@@ -54,3 +60,49 @@ def exit_process(code: int) -> None:
                 pass
         os._exit(code)
     sys.exit(code)
+
+
+def failure_problems(err: Failure) -> list[Problem]:
+    """Why a command stopped, as located problems (the front ends print them, ``--json-summary``
+    lists them)."""
+    match err:
+        case MissionError(problems=problems):
+            return list(problems)
+        case Interrupted(during=during):
+            return [Problem("", f"interrupted{' while ' + during if during else ''} ({err}): no output was written")]
+        case RecursionError():
+            return [Problem("", "the mission is nested too deeply to process")]
+    assert isinstance(err, OSError)
+    return [Problem(str(err.filename or ""), err.strerror or str(err))]
+
+
+def failure_lines(err: Failure) -> list[str]:
+    """The lines that tell why a command stopped: ``error: <problem>`` each, an interrupt as
+    itself."""
+    if isinstance(err, Interrupted):
+        return [str(p) for p in failure_problems(err)]
+    return [f"error: {p}" for p in failure_problems(err)]
+
+
+def failure_status(err: Failure) -> int:
+    """The exit status of a failed command: the error's own, else 2 (invalid input)."""
+    return err.exit_code if isinstance(err, (Interrupted, MissionError)) else 2
+
+
+def _to_devnull(fd: int) -> None:
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+
+
+def reader_gone() -> int:
+    """The reader of stdout went away (``… | head``): say so on stderr while it has a reader
+    (``2>&1 | head`` closes both), send whatever is left to print nowhere, so that the exit does
+    not fail a second time with a traceback; status 2."""
+    _to_devnull(sys.stdout.fileno())
+    try:
+        print("error: standard output: the reader closed the pipe; the output was not written", file=sys.stderr)
+        sys.stderr.flush()
+    except OSError:
+        _to_devnull(sys.stderr.fileno())
+    return 2

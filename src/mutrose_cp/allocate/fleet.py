@@ -21,12 +21,13 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
 from ..errors import MissionError, Problem, closest
-from ..io.located_json import LocatedJson, Path, parse_located_json, read_located_json
+from ..io.located_json import LocatedJson, Path, parse_located_json, path_text, read_located_json
 
 METRICS = ("euclidean", "manhattan")
 MAX_DURATION = 10**6  # per action: a schedule's times stay far inside CP-SAT's 64-bit range
 MAX_TIME = 10**6  # per travel-table entry (at speed 1)
 MAX_COORDINATE = 10**9
+MIN_SPEED = 10**-3  # the slowest robot's longest trip (coordinates at their bound) stays near 10^12 units
 
 
 @dataclass(frozen=True)
@@ -94,19 +95,9 @@ class Fleet:
         """A fleet from the same structure as the file, for programs (validated alike)."""
         return cls.parse(json.dumps(data, indent=1), source)
 
-    def robot(self, name: str) -> Robot:
-        return next(r for r in self.robots if r.name == name)
-
     def where(self, path: Path, *, key: bool = False) -> str:
         """``file:line:col`` of a value of the fleet file (the file name without a document)."""
         return self.document.at(path, key=key) if self.document is not None else self.source
-
-
-def _path_text(path: Path) -> str:
-    text = ""
-    for part in path:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
-    return text
 
 
 class _Reader:
@@ -118,7 +109,7 @@ class _Reader:
 
     def problem(self, path: Path, message: str, hint: str = "", *, key: bool = False) -> None:
         where = self.doc.at(path, key=key)
-        self.problems.append(Problem(where, f"{_path_text(path)}: {message}" if path else message, hint))
+        self.problems.append(Problem(where, f"{path_text(path)}: {message}" if path else message, hint))
 
     # -- shapes -------------------------------------------------------------------------------
 
@@ -140,8 +131,7 @@ class _Reader:
         self.problem(path, f"expected a non-empty string, got {_kind(value)}")
         return None
 
-    def number(self, value: Any, path: Path, *, low: float, high: float, whole: bool = False,
-               positive: bool = False) -> float | None:
+    def number(self, value: Any, path: Path, *, low: float, high: float, whole: bool = False) -> float | None:
         what = "a whole number" if whole else "a number"
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             self.problem(path, f"expected {what}, got {_kind(value)}")
@@ -149,9 +139,8 @@ class _Reader:
         if whole and not float(value).is_integer():
             self.problem(path, f"expected {what}, got {value!r}", "Times are whole time units.")
             return None
-        if positive and value <= 0 or not low <= value <= high:
-            bound = f"above 0 and at most {high:g}" if positive else f"from {low:g} to {high:g}"
-            self.problem(path, f"{value!r} is out of range: give a number {bound}")
+        if not low <= value <= high:
+            self.problem(path, f"{value!r} is out of range: give a number from {low:g} to {high:g}")
             return None
         return float(value)
 
@@ -213,7 +202,7 @@ class _Reader:
         name = self.string(item["name"], (*path, "name")) if "name" in item else None
         capabilities = self.capabilities(item.get("capabilities", []), (*path, "capabilities"))
         start = self.string(item["start"], (*path, "start")) if "start" in item else None
-        speed = self.number(item.get("speed", 1.0), (*path, "speed"), low=0, high=MAX_TIME, positive=True)
+        speed = self.number(item.get("speed", 1.0), (*path, "speed"), low=MIN_SPEED, high=MAX_TIME)
         if name is None or capabilities is None or speed is None or ("start" in item and start is None):
             return None
         return Robot(name, capabilities, start, speed)

@@ -2,59 +2,35 @@
 
 Work is drawn as solid bars labelled with the task, travel as hatched grey bars before them,
 so the time a robot spends moving stands apart from the time it spends working.  Matplotlib is
-the optional ``bench`` extra; it is imported only here.
+the optional ``bench`` extra (:mod:`mutrose_cp.charts`).
 """
 from __future__ import annotations
 
 import os
-from pathlib import Path
-from typing import Any
 
-from ..errors import MissionError
-from ..output_file import atomic_writer
+from ..charts import chart_format, figure, save_chart
 from .allocation import Allocation
 
-FORMATS = {".png": "png", ".svg": "svg"}
+FORMATS = ("png", "svg")
+OPTION = "--gantt"
 
 
 def gantt_format(path: str | os.PathLike[str]) -> str:
-    """The image format of ``path`` from its suffix; a located error for any other suffix."""
-    suffix = Path(path).suffix.lower()
-    if suffix not in FORMATS:
-        raise MissionError(f"the Gantt chart is written as PNG or SVG: name the file .png or .svg, not {suffix or 'without a suffix'}",
-                           os.fspath(path))
-    return FORMATS[suffix]
-
-
-def matplotlib_ready() -> None:
-    """Fail before any work when matplotlib is missing."""
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError:
-        raise MissionError("--gantt needs matplotlib: pip install 'mutrose-cp[bench]' (or pip install matplotlib)",
-                           "--gantt") from None
-
-
-def _pyplot() -> Any:  # matplotlib.pyplot
-    matplotlib_ready()
-    import matplotlib
-
-    matplotlib.use("Agg")
-    matplotlib.rcParams["svg.hashsalt"] = "mutrose-cp"  # the same ids in every SVG
-    import matplotlib.pyplot as plt
-
-    return plt
+    """The image format of ``path`` from its suffix, matplotlib checked: before any work."""
+    return chart_format(path, OPTION, FORMATS)
 
 
 def write_gantt(allocation: Allocation, path: str | os.PathLike[str]) -> None:
     """Draw the schedule and write it atomically to ``path`` (PNG or SVG, by its suffix)."""
+    import matplotlib
+
     fmt = gantt_format(path)
-    plt = _pyplot()
     schedule, problem = allocation.schedule, allocation.problem
     robots = [r.name for r in problem.fleet.robots]
-    colours = plt.get_cmap("tab20")
+    colours = matplotlib.colormaps["tab20"]
     tasks = {j: i for i, j in enumerate(schedule.jobs)}
-    fig, ax = plt.subplots(figsize=(max(8.0, min(24.0, 0.4 * schedule.makespan ** 0.5 + 8)), 1.0 + 0.55 * len(robots)))
+    chart = figure(figsize=(max(8.0, min(24.0, 0.4 * schedule.makespan ** 0.5 + 8)), 1.0 + 0.55 * len(robots)))
+    ax = chart.subplots()
     for row, robot in enumerate(robots):
         for v in schedule.routes[robot]:
             if v.travel:
@@ -69,10 +45,5 @@ def write_gantt(allocation: Allocation, path: str | os.PathLike[str]) -> None:
     ax.set_xlim(0, max(schedule.makespan, 1))
     ax.set_title(f"{allocation.options.objective.name} {allocation.objective} "
                  f"({'optimal' if allocation.status == 'OPTIMAL' else 'best found'}); hatched: travel")
-    fig.tight_layout()
-    metadata = {"Date": None} if fmt == "svg" else {"Software": None}
-    try:
-        with atomic_writer(path, "wb") as fh:
-            fig.savefig(fh, format=fmt, metadata=metadata, dpi=120)
-    finally:
-        plt.close(fig)
+    chart.tight_layout()
+    save_chart(chart, path, fmt, dpi=120)

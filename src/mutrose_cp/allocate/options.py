@@ -7,6 +7,9 @@ from dataclasses import dataclass
 
 from ..errors import MissionError
 
+MAX_WORKERS = 256  # CP-SAT search threads; more only add start-up time
+MAX_SEED = 2**31 - 1  # CP-SAT's random_seed is a 32-bit integer
+
 
 @dataclass(frozen=True)
 class Objective:
@@ -56,3 +59,12 @@ class AllocationOptions:
     seed: int = 0
     lp_bound: bool = True  # also compute the LP bound with Clarabel
     warm_start: bool = True  # give CP-SAT a first schedule (decomposition-first) as a hint
+
+    def __post_init__(self) -> None:
+        """CP-SAT's own ranges, checked here so that a bad value is the caller's located error
+        rather than the solver's failure (a seed over 32 bits is a TypeError inside it; tens of
+        thousands of threads fail the search at once, which would read as a timeout)."""
+        for name, value, high in (("workers", self.workers, MAX_WORKERS), ("seed", self.seed, MAX_SEED)):
+            low = 1 if name == "workers" else 0
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+                raise MissionError(f"{value!r} is out of range: give a whole number from {low} to {high}", f"--{name}")

@@ -188,7 +188,34 @@ def fleet_problems(mission: Mission, fleet: Fleet) -> list[Problem]:
     for i, robot in enumerate(fleet.robots):
         if robot.start is not None and robot.start not in known:
             problems.append(_unknown(fleet, ("robots", i, "start"), "place", robot.start, known))
-    return problems + world_problems
+    return problems + _stray_table_places(fleet, set(places)) + world_problems
+
+
+def _stray_table_places(fleet: Fleet, world: set[str]) -> list[Problem]:
+    """Places that only the travel table names, where no robot starts, on a single road: no
+    trip starts, ends or passes there, so the entry changes no travel time.  Such a place is a
+    misspelt one (``WardAA``), whose intended time would otherwise be silently left out."""
+    roads: dict[str, set[str]] = {}
+    for a, b in fleet.travel.times:
+        if a != b:
+            roads.setdefault(a, set()).add(b)
+            roads.setdefault(b, set()).add(a)
+    known = world | set(fleet.travel.coordinates)
+    starts = {r.start for r in fleet.robots}
+    problems = []
+    for name in sorted(roads):
+        if name in known or name in starts or len(roads[name]) > 1:
+            continue
+        (other,) = roads[name]
+        row = any(a == name for a, _ in fleet.travel.times)
+        near = closest(name, known)
+        problems.append(Problem(
+            fleet.where(("travel", "times", name) if row else ("travel", "times", other, name), key=True),
+            f"unknown place {name!r}: not a world location, not in travel.coordinates and no robot's start, and its "
+            f"only road (to {other}) leads nowhere else, so this entry changes no travel time",
+            f"Did you mean {near!r}?" if near else "Name a place of the mission, or join it to two places as a "
+                                                   "junction of the road network."))
+    return problems
 
 
 def _unknown(fleet: Fleet, path: tuple[str | int, ...], what: str, name: str, known: set[str], *,

@@ -24,7 +24,7 @@ from lxml import etree
 
 from ..errors import MissionError, Problem, located
 from ..mission import Mission
-from .fleet import Fleet, Robot
+from .fleet import MAX_COORDINATE, Fleet, Robot
 
 COORDINATE_FIELDS = ("x", "y")
 
@@ -80,6 +80,9 @@ def _point(record: etree._Element, name: str, source: str) -> tuple[tuple[float,
         if not math.isfinite(value):
             return None, Problem(located(source, _line(f)),
                                  f"location {name}: {f.tag} must be a number, got {text!r}")
+        if abs(value) > MAX_COORDINATE:  # as the fleet's coordinates: trip times stay in CP-SAT's range
+            return None, Problem(located(source, _line(f)), f"location {name}: {f.tag} {text} is out of range: "
+                                                            f"give a number from {-MAX_COORDINATE:g} to {MAX_COORDINATE:g}")
         values.append(value)
     return (values[0], values[1]), None
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -60,14 +61,39 @@ def parse_located_json(text: str, source: str) -> LocatedJson:
     except json.JSONDecodeError as err:
         raise MissionError(json_syntax_problem(err, text, source)) from None
     except ValueError as err:  # NaN, Infinity
-        raise MissionError(Problem(source, f"invalid JSON: {err}")) from None
+        raise MissionError(Problem(_constant_at(text, source), f"invalid JSON: {err}")) from None
     except RecursionError:
         raise MissionError(json_depth_problem(text, source)) from None
     tree = cached_lalr_parser("json.lark", propagate_positions=True, maybe_placeholders=False).parse(text)
     values: dict[Path, tuple[int, int]] = {}
     keys: dict[Path, tuple[int, int]] = {}
-    _walk(tree, (), values, keys)
+    repeated: list[tuple[Path, tuple[int, int]]] = []
+    _walk(tree, (), values, keys, repeated)
+    if repeated:  # json.loads keeps the last silently: the first value would be lost unseen
+        raise MissionError([Problem(located(source, *at), f"{path_text(path)}: the key {path[-1]!r} is given twice",
+                                    "Keep one: the later value would replace the earlier.") for path, at in repeated])
     return LocatedJson(source, data, values, keys)
+
+
+def path_text(path: Path) -> str:
+    """``robots[0].name``: a path as messages write it."""
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+_STRING_OR_CONSTANT = re.compile(r'"(?:[^"\\]|\\.)*"|(?P<constant>-?Infinity|NaN)')
+
+
+def _constant_at(text: str, source: str) -> str:
+    """``file:line:col`` of the first ``NaN`` or ``Infinity`` outside a string."""
+    for found in _STRING_OR_CONSTANT.finditer(text):
+        if found["constant"]:
+            start = found.start()
+            line = text.count("\n", 0, start) + 1
+            return located(source, line, start - (text.rfind("\n", 0, start) + 1) + 1)
+    return source
 
 
 def _position(node: Tree | Token) -> tuple[int, int]:
@@ -77,17 +103,22 @@ def _position(node: Tree | Token) -> tuple[int, int]:
 
 
 def _walk(node: Tree | Token, path: Path, values: dict[Path, tuple[int, int]],
-          keys: dict[Path, tuple[int, int]]) -> None:
-    """Record the position of ``node`` (the value at ``path``) and of everything inside it.
-    Duplicate keys keep the last one, as ``json.loads`` does."""
+          keys: dict[Path, tuple[int, int]], repeated: list[tuple[Path, tuple[int, int]]]) -> None:
+    """Record the position of ``node`` (the value at ``path``) and of everything inside it, and
+    each key given a second time in one object (with the position of the repetition)."""
     values[path] = _position(node)
     if not isinstance(node, Tree) or node.data not in ("object", "array"):
         return
+    seen: set[str] = set()
     for index, child in enumerate(node.children):
         if node.data == "array":
-            _walk(child, (*path, index), values, keys)
+            _walk(child, (*path, index), values, keys, repeated)
             continue
         key_token, value = child.children
-        key = (*path, json.loads(str(key_token)))
+        name = json.loads(str(key_token))
+        key = (*path, name)
+        if name in seen:
+            repeated.append((key, _position(key_token)))
+        seen.add(name)
         keys[key] = _position(key_token)
-        _walk(value, key, values, keys)
+        _walk(value, key, values, keys, repeated)
