@@ -15,7 +15,6 @@ import contextlib
 import csv
 import glob
 import io
-import json
 import os
 import shlex
 from dataclasses import dataclass
@@ -23,7 +22,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from ..errors import MissionError, Problem, closest, located
-from ..io.text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
+from ..io.text import decode_utf8, parse_json, read_bytes
 
 FIELDS = ("id", "command", "inputs", "options", "output")
 BATCH_FLAGS = ("-q", "--json-summary")  # what every job is run with: its summary is read, not printed
@@ -68,12 +67,7 @@ def read_manifest(path: str | os.PathLike[str]) -> list[Job]:
 
 
 def _json_jobs(text: str, source: str) -> list[Job]:
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise MissionError(json_syntax_problem(exc, text, source)) from None
-    except RecursionError:
-        raise MissionError(json_depth_problem(text, source)) from None
+    data = parse_json(text, source)
     prefix = "jobs"
     if isinstance(data, dict):
         unknown = [k for k in data if k != "jobs"]

@@ -6,7 +6,6 @@ reads is kept; problems are located by key path
 """
 from __future__ import annotations
 
-import json
 import os
 from typing import Any, Callable
 
@@ -21,7 +20,7 @@ from ..model.configuration import (
     WorldDbConfig,
 )
 from ..model.records import element_children, text_of
-from .text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
+from .text import decode_utf8, parse_json, read_bytes
 from .tolerant_xml import parse_tolerant_xml, source_line
 
 # ---------------------------------------------------------------------------------------------
@@ -49,12 +48,7 @@ def load_configuration(path: str | os.PathLike[str], *, lenient: bool = False) -
 def parse_configuration_json(text: str, source: str) -> Configuration:
     """Parse a JSON configuration.  Scalars are kept as the text PropertyTree would store
     (numbers verbatim, ``true``/``false``/``null``)."""
-    try:
-        data = json.loads(text, parse_int=str, parse_float=str, parse_constant=str)
-    except json.JSONDecodeError as exc:
-        raise MissionError(json_syntax_problem(exc, text, source)) from None
-    except RecursionError:
-        raise MissionError(json_depth_problem(text, source)) from None
+    data = parse_json(text, source, parse_int=str, parse_float=str, parse_constant=str)
     if not isinstance(data, dict):
         raise MissionError(Problem(source, "the configuration must be a JSON object"))
     return _Builder(source).build(data)

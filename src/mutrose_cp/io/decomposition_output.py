@@ -7,7 +7,6 @@ strings ``"True"``/``"False"``) or its XML form (several top-level elements, no 
 """
 from __future__ import annotations
 
-import json
 import re
 from dataclasses import dataclass
 from typing import Any
@@ -15,7 +14,7 @@ from typing import Any
 from lxml import etree
 
 from ..errors import MissionError, Problem, located
-from .text import decode_utf8, json_syntax_problem, read_bytes
+from .text import decode_utf8, parse_json, read_bytes
 from .tolerant_xml import source_line
 
 
@@ -83,10 +82,7 @@ def load_decomposition_output(path: str) -> DecompositionOutput:
     if data.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
         return _from_xml(data, path)
     text = decode_utf8(data, path, "decomposition output")
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise MissionError(json_syntax_problem(exc, text, path)) from None
+    doc = parse_json(text, path)
     if not isinstance(doc, dict):
         raise MissionError(Problem(path, "expected a JSON object with tasks, constraints and mission_decompositions"))
     return _from_json(doc, path)

@@ -23,7 +23,7 @@ from .expressions import (
     parse_node_text,
     parse_select,
 )
-from .text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
+from .text import decode_utf8, parse_json, read_bytes
 
 # ---------------------------------------------------------------------------------------------
 # Reader
@@ -83,13 +83,7 @@ def parse_goal_model(text: str, source: str) -> GoalModel:
     :class:`MissionError`; each is located as ``<source>: goal G3`` / ``task AT1`` /
     ``node <piStar id>`` / ``link <piStar id>``.
     """
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise MissionError(json_syntax_problem(err, text, source)) from None
-    except RecursionError:
-        raise MissionError(json_depth_problem(text, source)) from None
-    return _Reader(source).read(data)
+    return _Reader(source).read(parse_json(text, source))
 
 
 def _scalar_text(value: Any) -> str | None:

@@ -9,7 +9,7 @@ import os
 import stat
 from contextlib import contextmanager
 from contextvars import ContextVar
-from typing import Iterator
+from typing import Any, Iterator
 
 from ..errors import MissionError, Problem, located
 
@@ -81,6 +81,17 @@ def decode_utf8(data: bytes, source: str, what: str) -> str:
 
 # ---------------------------------------------------------------------------------------------
 # JSON documents that cannot be decoded
+
+
+def parse_json(text: str, source: str, **options: Any) -> Any:
+    """``json.loads(text, **options)`` with its failures as located problems: a syntax error at
+    its ``file:line:col``, nesting too deep for the decoder at its deepest bracket."""
+    try:
+        return json.loads(text, **options)
+    except json.JSONDecodeError as err:
+        raise MissionError(json_syntax_problem(err, text, source)) from None
+    except RecursionError:
+        raise MissionError(json_depth_problem(text, source)) from None
 
 
 def json_syntax_problem(err: json.JSONDecodeError, text: str, source: str) -> Problem:
