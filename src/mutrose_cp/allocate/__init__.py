@@ -13,24 +13,41 @@ when it runs, so reading and checking a fleet stays light.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable
-
-from .fleet import Durations, Fleet, Robot, TravelSpec
-from .options import AllocationOptions, Objective
-from .problem import NoAllocationError
+import importlib
+from typing import TYPE_CHECKING, Any, Callable
 
 if TYPE_CHECKING:
     from ..mission import Mission
     from .allocation import Allocation
+    from .fleet import Durations, Fleet, Robot, TravelSpec
+    from .options import AllocationOptions, Objective
+    from .problem import NoAllocationError
     from .search import Progress
+
+# the public names, each loaded from its module on first use: the command line reads the bounds
+# of .options for every command, which must not load the fleet reader and the allocation problem
+_EXPORTS = {"Durations": "fleet", "Fleet": "fleet", "Robot": "fleet", "TravelSpec": "fleet",
+            "AllocationOptions": "options", "Objective": "options", "NoAllocationError": "problem"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = ["AllocationOptions", "Durations", "Fleet", "NoAllocationError", "Objective", "Robot", "TravelSpec",
            "allocate"]
 
 
-def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = AllocationOptions(),
+def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions | None = None,
              progress: Callable[[Progress], None] | None = None) -> Allocation:
-    """Allocate ``mission`` to ``fleet`` (see :func:`.allocation.allocate`)."""
+    """Allocate ``mission`` to ``fleet`` (see :func:`.allocation.allocate`); default options
+    when none are given."""
     from .allocation import allocate as run
+    from .options import AllocationOptions
 
-    return run(mission, fleet, options, progress)
+    return run(mission, fleet, options if options is not None else AllocationOptions(), progress)
