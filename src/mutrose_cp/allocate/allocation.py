@@ -111,7 +111,8 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
         add_hint(am, warm)
     seconds["model"] = time.perf_counter() - clock - seconds.get("load", 0.0) - seconds.get("lp", 0.0)
     left = max(SEARCH_SHARE * budget, budget - (time.perf_counter() - clock))
-    outcome = search(am, SearchLimits(left, options.workers, options.seed), progress)
+    improve_only = restriction.active and warm is not None  # large-neighbourhood search from the hint
+    outcome = search(am, SearchLimits(left, options.workers, options.seed, improve_only), progress)
     seconds["search"] = outcome.seconds
     schedule = _schedule(am, outcome.values)
     if not options.lp_bound:
