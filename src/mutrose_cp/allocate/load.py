@@ -30,6 +30,7 @@ from ortools.sat.python import cp_model
 from ..solve.native import cmh
 
 from .fleet import Robot
+from .model import horizon
 from .options import Objective
 from .problem import AllocationProblem, Job
 
@@ -83,8 +84,8 @@ def _relaxation(problem: AllocationProblem, objective: Objective
         if d not in problem.jobs or len(problem.jobs[d].candidates) < problem.jobs[d].robots.min:
             m.add_bool_or([_literal(m, problem.dm.decomposition[d]).Not()])
     _shared_robots(m, problem, chosen)
-    longest = sum(j.duration for j in problem.jobs.values()) + _longest_trip(problem)
-    makespan = m.new_int_var(0, max(longest, 1), "load_makespan")
+    longest = horizon(problem)  # the joint model's: every schedule of it fits, so the bound stays one
+    makespan = m.new_int_var(0, longest, "load_makespan")
     ways = ways_in(problem)
     _pools(m, problem, chosen, ways, makespan)
     _chains(m, problem, chosen, makespan, longest)
@@ -115,11 +116,6 @@ def _literal(m: cp_model.CpModel, literal: object) -> Any:
 def _true(values: Any, literal: Any) -> bool:
     index = literal.index
     return bool(values[index]) if index >= 0 else not values[-index - 1]
-
-
-def _longest_trip(problem: AllocationProblem) -> int:
-    places = problem.travel.places
-    return max((problem.time(r, a, b) for r in problem.fleet.robots for a in places for b in places), default=0)
 
 
 def pools(problem: AllocationProblem) -> list[frozenset[str]]:
