@@ -23,7 +23,7 @@ def main(argv: list[str]) -> None:
     allocation = mission.allocate(fleet, AllocationOptions(Objective.parse("makespan"), time_limit=10))
     schedule = allocation.schedule
     print(f"{allocation.status}: makespan {schedule.makespan}, travel {schedule.travel}, "
-          f"CP-SAT bound {allocation.cp_bound}, LP bound {allocation.lp_value:.1f}")
+          f"CP-SAT bound {allocation.cp_bound}, LP bound {allocation.lp_value}, load bound {allocation.load_value}")
     for robot, visits in schedule.routes.items():
         print(f"  {robot}: " + ", ".join(f"{v.job}@{v.location} {v.start}-{v.end}" for v in visits))
 

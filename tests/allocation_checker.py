@@ -190,7 +190,7 @@ def _check_objective(objective: dict, makespan: int, travel: int) -> None:
         value = a * makespan + b * travel
     if objective["value"] != value:
         _fail("objective value", (objective, value))
-    for bound in ("bound", "lp_bound"):
+    for bound in ("bound", "lp_bound", "load_bound"):
         if objective[bound] is not None and objective[bound] > value + 1e-6:
             _fail(f"{bound} above the objective", (objective, value))
     if objective["status"] == "OPTIMAL" and objective["gap"] != 0:

@@ -2,10 +2,15 @@
 
     decomposition model (solve/embedding.py) + fleet
         --problem.py-->  jobs, candidates, precedences, travel times
-        --model.py-->    the joint CP-SAT model   --warmstart.py--> a first schedule as a hint
-        --search.py-->   the best schedule within the time limit, and CP-SAT's bound
-        --schedule.py--> chosen jobs, teams, compacted times, routes
+        --load.py-->     the load bound, and a decomposition that spreads the work
+        --warmstart.py--> a first schedule (list scheduling), a hint for the search
         --bounds.py-->   the LP bound (Clarabel)
+        --model.py-->    the joint CP-SAT model
+        --search.py-->   the best schedule within the time left, and CP-SAT's bound
+        --schedule.py--> chosen jobs, teams, compacted times, routes
+
+The time limit is the whole run's: the load relaxation may take a tenth of it and the LP a
+quarter (an LP cut short gives no bound), and the search has what is left, at least a tenth.
 """
 from __future__ import annotations
 
@@ -15,6 +20,7 @@ from typing import TYPE_CHECKING, Callable
 
 from .bounds import LpBound, lp_bound
 from .fleet import Fleet
+from .load import LoadBound, load_bound
 from .model import AllocationModel, build_model
 from .options import AllocationOptions
 from .problem import AllocationProblem, build_problem
@@ -25,6 +31,10 @@ from .warmstart import add_hint, warm_start
 
 if TYPE_CHECKING:
     from ..mission import Mission
+
+LOAD_SHARE = 0.1  # of the time limit, at most, for the load relaxation
+LP_SHARE = 0.25  # for the LP
+SEARCH_SHARE = 0.1  # for the search, at least
 
 
 @dataclass(frozen=True)
@@ -37,6 +47,7 @@ class Allocation:
     schedule: Schedule
     cp_bound: float | None  # CP-SAT's proven lower bound on the objective (None: restricted search)
     lp: LpBound | None
+    load: LoadBound | None = None
     seconds: dict[str, float] = field(default_factory=dict)
     restricted: bool = False  # a large mission searched within near robots and places
 
@@ -61,6 +72,14 @@ class Allocation:
         return relative_gap(self.objective, self.lp_value)
 
     @property
+    def load_value(self) -> float | None:
+        return self.load.value if self.load is not None else None
+
+    @property
+    def load_gap(self) -> float | None:
+        return relative_gap(self.objective, self.load_value)
+
+    @property
     def decomposition(self) -> list[str]:
         """The chosen decomposition ids, in mission order."""
         return list(self.schedule.jobs)
@@ -75,23 +94,32 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
     before any schedule is found."""
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
+    budget = options.time_limit
     problem = build_problem(mission.decomposition_model(), fleet)
-    warm = warm_start(problem) if options.warm_start else None
+    load = None
+    if options.lp_bound or options.warm_start:
+        load = load_bound(problem, options.objective, LOAD_SHARE * budget, options.workers, options.seed)
+        seconds["load"] = load.seconds
+    warm = warm_start(problem, load.decompositions if load else ()) if options.warm_start else None
+    lp = lp_bound(problem, options.objective, LP_SHARE * budget) if options.lp_bound else None
+    if lp is not None:
+        seconds["lp"] = lp.seconds
     restriction = restrict(problem, warm.teams if warm else None,
                            {(a, b) for _, a, b in warm.route_arcs(problem)} if warm else None)
     am = build_model(problem, options.objective, restriction)
     if warm is not None:
         add_hint(am, warm)
-    seconds["model"] = time.perf_counter() - clock
-    outcome = search(am, SearchLimits(options.time_limit, options.workers, options.seed), progress)
+    seconds["model"] = time.perf_counter() - clock - seconds.get("load", 0.0) - seconds.get("lp", 0.0)
+    left = max(SEARCH_SHARE * budget, budget - (time.perf_counter() - clock))
+    improve_only = restriction.active and warm is not None  # large-neighbourhood search from the hint
+    outcome = search(am, SearchLimits(left, options.workers, options.seed, improve_only), progress)
     seconds["search"] = outcome.seconds
     schedule = _schedule(am, outcome.values)
-    lp = lp_bound(problem, options.objective) if options.lp_bound else None
-    if lp is not None:
-        seconds["lp"] = lp.seconds
+    if not options.lp_bound:
+        load = None
     if restriction.active:  # the restricted model's optimum and bound say nothing of the mission's
-        return Allocation(problem, options, "FEASIBLE", schedule, None, lp, seconds, restricted=True)
-    return Allocation(problem, options, outcome.status, schedule, outcome.bound, lp, seconds)
+        return Allocation(problem, options, "FEASIBLE", schedule, None, lp, load, seconds, restricted=True)
+    return Allocation(problem, options, outcome.status, schedule, outcome.bound, lp, load, seconds)
 
 
 def _schedule(am: AllocationModel, values: list[int]) -> Schedule:

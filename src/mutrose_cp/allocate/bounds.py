@@ -80,8 +80,10 @@ class _Lp:
         self.eq.append((row, rhs - constant))
 
 
-def lp_bound(problem: AllocationProblem, objective: Objective) -> LpBound:
-    """The LP relaxation's optimum, a lower bound on ``objective`` (see the module docstring)."""
+def lp_bound(problem: AllocationProblem, objective: Objective, time_limit: float | None = None) -> LpBound:
+    """The LP relaxation's optimum, a lower bound on ``objective`` (see the module docstring).
+    Clarabel stops at ``time_limit`` (seconds, building the LP included); an LP it did not
+    solve gives no bound (``value`` None, ``status`` says why)."""
     started = time.perf_counter()
     lp = _Lp()
     y = _decomposition_relaxation(lp, problem)
@@ -97,7 +99,7 @@ def lp_bound(problem: AllocationProblem, objective: Objective) -> LpBound:
     _operator_chains(lp, problem, y, makespan)
     travel = [(cost, e) for cost, e in visits.values()]
     goal = [(float(objective.makespan_weight), makespan)] + [(objective.travel_weight * c, e) for c, e in travel]
-    return _solve(lp, goal, started)
+    return _solve(lp, goal, started, time_limit)
 
 
 def _decomposition_relaxation(lp: _Lp, problem: AllocationProblem) -> dict[str, Expr]:
@@ -227,7 +229,7 @@ def _post_order(tg: TaskGraph) -> list[int]:
     return order
 
 
-def _solve(lp: _Lp, goal: list[tuple[float, Expr]], started: float) -> LpBound:
+def _solve(lp: _Lp, goal: list[tuple[float, Expr]], started: float, time_limit: float | None) -> LpBound:
     import clarabel  # type: ignore[import-untyped]
     import numpy as np
     import scipy.sparse as sp  # type: ignore[import-untyped]
@@ -250,6 +252,11 @@ def _solve(lp: _Lp, goal: list[tuple[float, Expr]], started: float) -> LpBound:
     cones = ([clarabel.ZeroConeT(len(lp.eq))] if lp.eq else []) + [clarabel.NonnegativeConeT(len(lp.le))]
     settings = clarabel.DefaultSettings()
     settings.verbose = False
+    if time_limit is not None:
+        left = time_limit - (time.perf_counter() - started)
+        if left <= 0:
+            return LpBound(None, "MaxTime", n, len(rows), time.perf_counter() - started)
+        settings.time_limit = left
     solution = clarabel.DefaultSolver(sp.csc_matrix((n, n)), q, a, np.array(rhs, dtype=float), cones, settings).solve()
     status = str(solution.status)
     # the solver's tolerance, taken off so that the bound stays a bound

@@ -47,7 +47,8 @@ class Objective:
 
 @dataclass(frozen=True)
 class AllocationOptions:
-    """What to minimise and how long to search.
+    """What to minimise and how long the allocation takes (``time_limit``: bounds, model and
+    search together, see :mod:`.allocation`).
 
     CP-SAT runs with ``seed`` and ``workers`` threads (its portfolio, large-neighbourhood
     search included, from 2 on).  A search that ends before ``time_limit`` with one worker

@@ -53,6 +53,7 @@ class SearchLimits:
     time_limit: float = 10.0
     workers: int = 1
     seed: int = 0
+    improve_only: bool = False  # every worker improves the hinted schedule (no proof is wanted)
 
 
 @dataclass(frozen=True)
@@ -95,6 +96,9 @@ def search(am: AllocationModel, limits: SearchLimits,
         # probing and symmetry detection take most of a minute on large routes, before any search
         parameters.cp_model_probing_level = 0
         parameters.symmetry_level = 0
+    if limits.improve_only:
+        # a restricted search reports no bound: workers spent on proofs would only be lost
+        parameters.use_lns_only = True
     started = time.monotonic()
     watcher = _Watcher(progress or (lambda _: None), started)
     try:

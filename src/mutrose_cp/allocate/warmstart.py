@@ -1,19 +1,25 @@
-"""A first schedule, handed to CP-SAT as a hint: decomposition first, then a greedy allocation.
+"""A first schedule, handed to CP-SAT as a hint: decomposition first, then list scheduling.
 
 1. The decomposition: the least total work, found exactly by the decomposer's optimisation
-   (``decompose --optimize`` with the fleet's action durations as costs).
-2. The allocation: its jobs in an order that respects the precedences, each given the robots
-   (among those able) that can be there first, where it must share robots with a job already
-   placed, those robots; it starts when its predecessors have ended and its robots arrived.
+   (``decompose --optimize`` with the fleet's action durations as costs), or the one of the
+   load relaxation (:mod:`.load`), which spreads the work over the robots able to do it; the
+   one whose schedule ends first is kept.
+2. The allocation, by list scheduling: of the jobs whose predecessors are placed, the one that
+   can end soonest goes next, on the able robots that can be there first (where it must share
+   robots with a job already placed, those robots); it starts when its predecessors have ended
+   and its robots arrived.  Taking the jobs in mission order instead would send each robot to
+   all its first tasks before any second one, far and back.
 
 The hint only guides the search: CP-SAT checks it like any other assignment, and a mission
-where the greedy step gets stuck (the first decomposition needs robots that the greedy choice
-used up) is simply searched without a hint.
+where the greedy step gets stuck (a decomposition needs robots that the greedy choice used up)
+is simply searched without a hint.
 """
 from __future__ import annotations
 
+import heapq
 from dataclasses import dataclass
 from graphlib import CycleError, TopologicalSorter
+from typing import Sequence
 
 from ..errors import MissionError
 from ..solve.decompose import DecompositionRequest
@@ -43,14 +49,23 @@ class WarmStart:
         return arcs
 
 
-def warm_start(problem: AllocationProblem) -> WarmStart | None:
-    """The greedy schedule of the least-work decomposition; None when there is none."""
-    chosen = least_work_decomposition(problem)
-    if chosen is None:
-        return None
-    plan = greedy_plan(problem, chosen)
-    values = _decomposition_values(problem, set(chosen))
-    return None if plan is None or values is None else WarmStart(chosen, *plan, values)
+def warm_start(problem: AllocationProblem, balanced: Sequence[list[str]] = ()) -> WarmStart | None:
+    """The list schedule of the least-work decomposition or of one of ``balanced`` (the load
+    relaxation's), whichever ends first; None when there is none."""
+    plans: list[tuple[int, int, list[str], Plan]] = []
+    for chosen in (*balanced, least_work_decomposition(problem)):
+        if chosen is None or not all(d in problem.jobs for d in chosen):
+            continue
+        plan = greedy_plan(problem, chosen)
+        if plan is not None:
+            teams, start = plan
+            plans.append((max((start[j] + problem.jobs[j].duration for j in chosen), default=0), len(plans), chosen,
+                          plan))
+    for _, _, chosen, plan in sorted(plans, key=lambda p: p[:2]):
+        values = _decomposition_values(problem, set(chosen))
+        if values is not None:
+            return WarmStart(chosen, *plan, values)
+    return None
 
 
 def _decomposition_values(problem: AllocationProblem, chosen: set[str]) -> list[int] | None:
@@ -92,34 +107,80 @@ def least_work_decomposition(problem: AllocationProblem) -> list[str] | None:
 
 
 def greedy_plan(problem: AllocationProblem, chosen: list[str]) -> Plan | None:
-    """Teams and start times for ``chosen`` (see the module docstring), None when stuck."""
-    order = _precedence_order(problem, chosen)
-    if order is None:
+    """Teams and start times for ``chosen`` by list scheduling (see the module docstring), None
+    when stuck."""
+    if _precedence_order(problem, chosen) is None:
         return None
-    robots = {r.name: r for r in problem.fleet.robots}
-    free = dict.fromkeys(robots, 0)
-    place = {r.name: r.start for r in problem.fleet.robots}
-    partners = _partners(problem, set(chosen))
-    before = chosen_predecessors(problem, set(chosen))
-    teams: dict[str, tuple[str, ...]] = {}
-    start: dict[str, int] = {}
-    for j in order:
-        job = problem.jobs[j]
+    return _ListScheduler(problem, chosen).run()
 
-        def arrival(r: str) -> int:
-            return free[r] + problem.time(robots[r], place[r], job.location)
 
-        placed = [teams[p] for p in partners.get(j, []) if p in teams]
-        able = [r for r in job.candidates if all(r in problem.jobs[p].candidates for p in partners.get(j, []))]
-        team = placed[0] if placed else tuple(sorted(able, key=lambda r: (arrival(r), r))[:job.robots.min])
+class _ListScheduler:
+    """Earliest finish first: of the jobs whose predecessors are placed, the one that can end
+    soonest is placed next, on the robots that get it done soonest.  Estimates are refreshed
+    lazily: a job whose estimate grew since it was queued goes back into the queue."""
+
+    def __init__(self, problem: AllocationProblem, chosen: list[str]) -> None:
+        self.problem = problem
+        self.robots = {r.name: r for r in problem.fleet.robots}
+        self.free = dict.fromkeys(self.robots, 0)
+        self.place = {r.name: r.start for r in problem.fleet.robots}
+        self.partners = _partners(problem, set(chosen))
+        self.before = chosen_predecessors(problem, set(chosen))
+        self.position = {j: i for i, j in enumerate(problem.jobs)}
+        self.teams: dict[str, tuple[str, ...]] = {}
+        self.start: dict[str, int] = {}
+        self.chosen = chosen
+
+    def run(self) -> Plan | None:
+        after: dict[str, list[str]] = {}
+        waiting = {j: len(self.before[j]) for j in self.chosen}
+        for j in self.chosen:
+            for i in self.before[j]:
+                after.setdefault(i, []).append(j)
+        queue = [(0, self.position[j], j) for j in self.chosen if not waiting[j]]
+        heapq.heapify(queue)
+        while queue:
+            _, rank, j = heapq.heappop(queue)
+            option = self._best(j)
+            if option is None:
+                return None
+            ready, team = option
+            finish = ready + self.problem.jobs[j].duration
+            if queue and (finish, rank) > queue[0][:2]:
+                heapq.heappush(queue, (finish, rank, j))  # another job may end sooner now
+                continue
+            self._place(j, ready, team)
+            for k in after.get(j, []):
+                waiting[k] -= 1
+                if not waiting[k]:
+                    heapq.heappush(queue, (0, self.position[k], k))
+        return (self.teams, self.start) if len(self.teams) == len(self.chosen) else None
+
+    def _arrival(self, r: str, location: str | None) -> int:
+        return self.free[r] + self.problem.time(self.robots[r], self.place[r], location)
+
+    def _best(self, j: str) -> tuple[int, tuple[str, ...]] | None:
+        """The earliest start of ``j`` and its team: the robots already bound to it by a shared
+        robot rule, or else the able ones that can be there first."""
+        job, problem = self.problem.jobs[j], self.problem
+        ready = max((self.start[i] + problem.jobs[i].duration for i in self.before[j]), default=0)
+        placed = [self.teams[p] for p in self.partners.get(j, []) if p in self.teams]
+        if placed:
+            team = placed[0]
+        else:
+            able = [r for r in job.candidates
+                    if all(r in problem.jobs[p].candidates for p in self.partners.get(j, []))]
+            team = tuple(sorted(able, key=lambda r: (max(ready, self._arrival(r, job.location)), r))[:job.robots.min])
         if len(team) < job.robots.min or not set(team) <= set(job.candidates) or len(team) > job.robots.max:
             return None
-        ready = max([start[i] + problem.jobs[i].duration for i in before[j]] + [arrival(r) for r in team] + [0])
-        teams[j], start[j] = team, ready
+        return max([ready] + [self._arrival(r, job.location) for r in team]), team
+
+    def _place(self, j: str, start: int, team: tuple[str, ...]) -> None:
+        job = self.problem.jobs[j]
+        self.teams[j], self.start[j] = team, start
         for r in team:
-            free[r] = ready + job.duration
-            place[r] = job.location or place[r]
-    return teams, start
+            self.free[r] = start + job.duration
+            self.place[r] = job.location or self.place[r]
 
 
 def _precedence_order(problem: AllocationProblem, chosen: list[str]) -> list[str] | None:

@@ -1,0 +1,110 @@
+"""The allocation's lower bounds and its warm start, on missions small enough to be solved to
+optimality: each bound is at most the proven optimum, and the warm start's schedule passes the
+independent checker (``allocation_checker``) as it is."""
+from __future__ import annotations
+
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+from allocation_checker import check_allocation
+from mutrose_cp.allocate import AllocationOptions, Fleet, Objective
+from mutrose_cp.allocate.allocation import Allocation
+from mutrose_cp.allocate.load import load_bound
+from mutrose_cp.allocate.output import write_decomposition, write_schedule
+from mutrose_cp.allocate.problem import build_problem
+from mutrose_cp.allocate.schedule import compact
+from mutrose_cp.allocate.warmstart import greedy_plan, least_work_decomposition, warm_start
+from mutrose_cp.api import Mission, find_mission_files
+from mutrose_cp.cli import main
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+from allocation import generate  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+DELIVERY = ROOT / "examples" / "item-delivery"
+FLEET = DELIVERY / "fleet.json"
+
+
+def _variants(tmp_path: Path) -> list[tuple[Path, Path]]:
+    """The delivery example with its fleet, without its all-rounder, and a generated grid of
+    five deliveries for three robots (one of each kind)."""
+    data = json.loads(FLEET.read_text())
+    data["robots"] = [r for r in data["robots"] if r["name"] != "allrounder"]
+    fewer = tmp_path / "fewer.json"
+    fewer.write_text(json.dumps(data))
+    return [(DELIVERY, FLEET), (DELIVERY, fewer), generate(5, 3, tmp_path)]
+
+
+@pytest.mark.parametrize("objective", ["makespan", "weighted:2,1"])
+def test_the_load_bound_is_at_most_the_optimum(tmp_path, objective):
+    for mission_dir, fleet_path in _variants(tmp_path):
+        mission = Mission.load(*find_mission_files(mission_dir))
+        options = AllocationOptions(objective=Objective.parse(objective), time_limit=60)
+        allocation = mission.allocate(Fleet.read(fleet_path), options)
+        assert allocation.status == "OPTIMAL" and allocation.load is not None
+        assert allocation.load.status == "OPTIMAL"
+        assert 0 < allocation.load_value <= allocation.objective, (mission_dir, fleet_path)
+
+
+def test_the_load_bound_counts_the_pool_of_able_robots():
+    """The example without travel: the deliveries' work falls on the robots able to do it, so the
+    bound is above the whole fleet's average work."""
+    mission = Mission.load(*find_mission_files(DELIVERY))
+    problem = build_problem(mission.decomposition_model(), Fleet.read(FLEET))
+    bound = load_bound(problem, Objective(), 10.0)
+    chosen = least_work_decomposition(problem)
+    assert chosen is not None and bound.decompositions
+    average = sum(problem.jobs[d].duration for d in chosen) / len(problem.fleet.robots)
+    assert bound.status == "OPTIMAL" and bound.value is not None and bound.value > average
+
+
+def test_the_warm_start_passes_the_checker(tmp_path):
+    for number, (mission_dir, fleet_path) in enumerate(_variants(tmp_path)):
+        mission = Mission.load(*find_mission_files(mission_dir))
+        problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
+        warm = warm_start(problem, load_bound(problem, Objective(), 10.0).decompositions)
+        assert warm is not None
+        end = {j: warm.start[j] + problem.jobs[j].duration for j in warm.chosen}
+        schedule = compact(problem, warm.chosen, warm.teams, warm.start, end)
+        assert dict(schedule.start) == warm.start  # already as early as its sequences allow
+        allocation = Allocation(problem, AllocationOptions(), "FEASIBLE", schedule, None, None)
+        schedule_path, output_path = tmp_path / f"warm{number}.json", tmp_path / f"warm{number}-mission.json"
+        write_schedule(allocation, schedule_path)
+        write_decomposition(allocation, output_path, "JSON")
+        check_allocation(mission, fleet_path, schedule_path, output_path)
+
+
+def test_the_warm_start_spreads_the_deliveries(tmp_path):
+    """Twelve deliveries for six robots: the list schedule of the balanced decomposition ends
+    well before the one of the least-work decomposition, which needs the two all-rounders."""
+    mission_dir, fleet_path = generate(12, 6, tmp_path)
+    mission = Mission.load(*find_mission_files(mission_dir))
+    problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
+    balanced = load_bound(problem, Objective(), 10.0).decompositions[-1]
+    least = least_work_decomposition(problem)
+    assert least is not None
+    makespans = []
+    for chosen in (balanced, least):
+        plan = greedy_plan(problem, chosen)
+        assert plan is not None
+        makespans.append(max(plan[1][j] + problem.jobs[j].duration for j in chosen))
+    assert makespans[0] < makespans[1]
+
+
+def test_an_lp_cut_by_its_time_limit_gives_no_bound(tmp_path, monkeypatch, capsys):
+    from mutrose_cp.allocate import allocation
+
+    monkeypatch.setattr(allocation, "LP_SHARE", 0.0)
+    mission = tmp_path / "mission"
+    shutil.copytree(DELIVERY, mission, ignore=shutil.ignore_patterns("output"))
+    out, schedule = tmp_path / "run.json", tmp_path / "schedule.json"
+    assert main(["allocate", str(mission), "--fleet", str(FLEET), "-o", str(out), "--schedule", str(schedule),
+                 "--time-limit", "20"]) == 0
+    doc = check_allocation(Mission.load(*find_mission_files(mission)), FLEET, schedule, out)
+    assert doc["objective"]["lp_bound"] is None and doc["objective"]["lp_status"] == "MaxTime"
+    assert doc["objective"]["load_bound"] is not None
+    assert "LP not solved (MaxTime)" in capsys.readouterr().err
