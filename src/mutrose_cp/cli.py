@@ -502,19 +502,23 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"mutrose-cp {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
+    def reading(p: argparse.ArgumentParser) -> None:
+        """How the inputs are read: XML repair and the size bound."""
+        p.add_argument("--lenient-xml", action="store_true",
+                       help="read XML whose repair changes which records exist or how they nest, as the original "
+                            "does (with warnings) instead of refusing it")
+        p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+                       help="refuse input files larger than this (default 256)")
+
     def common(p: argparse.ArgumentParser) -> None:
         p.add_argument("inputs", nargs="+", metavar="INPUT",
                        help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
         p.add_argument("--config", help="in a mission folder with several configurations, the one to use")
         p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
         p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
-        p.add_argument("--lenient-xml", action="store_true",
-                       help="read XML whose repair changes which records exist or how they nest, as the original "
-                            "does (with warnings) instead of refusing it")
+        reading(p)
         p.add_argument("--world", metavar="FILE",
                        help="read the world knowledge from FILE instead of the configuration's world_db.path")
-        p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
-                       help="refuse input files larger than this (default 256)")
         p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
         p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
 
@@ -617,10 +621,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
     p.add_argument("--problem-out", metavar="FILE", help="the problem file (default OUT-problem.hddl); exit 2 "
                                                          "when the mission has no problem form")
-    p.add_argument("--lenient-xml", action="store_true",
-                   help="read XML whose repair changes its records, as the original does (see check)")
-    p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
-                   help="refuse input files larger than this (default 256)")
+    reading(p)
     p.add_argument("-q", "--quiet", action="store_true", help="no warnings and no summary on stderr")
     p.set_defaults(func=cmd_export_hddl)
 
