@@ -1,4 +1,4 @@
-"""The outputs of ``allocate``, ``export-hddl``, ``compare --plot`` and the ``mutrose`` drop-in
+"""The outputs of ``decompose``, ``allocate``, ``export-hddl``, ``compare --plot`` and the ``mutrose`` drop-in
 are checked before any work: an output that is an input, two outputs that are one file, an
 output that is a folder are refused (exit 2, located at the output), and nothing is written.
 A command that writes several files makes them all before writing the first, so a refusal
@@ -70,6 +70,25 @@ def test_allocate_refuses_a_folder_before_the_search(tmp_path: Path, capsys):
                  "--schedule", str(schedule), "-q"]) == 2
     assert "out.json: cannot write the output: it is a folder" in capsys.readouterr().err
     assert not schedule.exists()
+
+
+@pytest.mark.parametrize("clash", ["folder", "input"])
+def test_decompose_refuses_an_unsafe_output_before_solving(tmp_path: Path, capsys, monkeypatch, clash: str):
+    """A long solve must not end in "cannot write the output": the output is checked first."""
+    from mutrose_cp.mission import Mission
+
+    def solve(*_args: object, **_kwargs: object) -> None:
+        raise AssertionError("the mission was solved before its output was checked")
+
+    monkeypatch.setattr(Mission, "decompose", solve)
+    out = tmp_path / "out.json"
+    if clash == "folder":
+        out.mkdir()
+    else:
+        out = HOSPITAL / "configuration" / "configuration.json"
+    assert main(["decompose", str(HOSPITAL), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert ("it is a folder" if clash == "folder" else "would overwrite the input") in err
 
 
 # ----------------------------------------------------------------------------------------------

@@ -299,6 +299,18 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     mission.progress = _Progress(not args.quiet).stage
     _warn(args, mission)
+    # where and how the output goes is settled, and refused if unsafe, before any work
+    if args.output:
+        out_path = Path(args.output)
+    elif folder is not None and not Path(mission.config.output.file_path).is_absolute():
+        out_path = folder / mission.config.output.file_path
+    else:
+        out_path = mission.output_path()
+    file_type = _output_format(args, mission)
+    if args.json_style == "standard" and file_type != "json":
+        raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
+                           "drop --json-style or write JSON (--format json)")
+    _refuse_inputs_as_output((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg))
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
     progress = _Progress(not args.quiet, f"mission decompositions: {label}")
     with phase("expanding the mission"):
@@ -314,17 +326,6 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     key = {d.index: f"t{i}" for i, d in enumerate(tg.decompositions())}
     section = result.space_section(key.__getitem__)
     note = _note(request, result)
-    if args.output:
-        out_path = Path(args.output)
-    elif folder is not None and not Path(mission.config.output.file_path).is_absolute():
-        out_path = folder / mission.config.output.file_path
-    else:
-        out_path = mission.output_path()
-    file_type = _output_format(args, mission)
-    if args.json_style == "standard" and file_type != "json":
-        raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
-                           "drop --json-style or write JSON (--format json)")
-    _refuse_inputs_as_output((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg))
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
                         space=section)
     if args.ihtn:
