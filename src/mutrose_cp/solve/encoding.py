@@ -79,7 +79,6 @@ class Encoder:
         # the value of each atom after a prefix of its writers, as a tree of prefixes
         self._bool_chains: dict[AtomKey, _Chain[tuple[Lit, Lit]]] = {}
         self._num_chains: dict[AtomKey, _Chain[tuple[Lit, int | None]]] = {}
-        self._last_chain: dict[AtomKey, tuple[tuple[tuple[int, bool], ...], _Chain[tuple[Lit, Lit]]]] = {}
         order = application_order(self.effects)
         self.bool_writers: dict[AtomKey, list[tuple[int, bool]]] = {}
         self.num_writers: dict[AtomKey, list[tuple[int, str, float]]] = {}
@@ -165,22 +164,17 @@ class Encoder:
         sequence) share its steps, so the whole state of the atom between two tasks is one pair of
         literals: components of tasks coupled through a few facts decompose block by block
         (:mod:`.layered`)."""
-        node, done = self._chain_root(atom, self._bool_chains, self._bool_start), 0
-        key = tuple(writers)
-        previous = self._last_chain.get(atom)
-        if previous is not None and key[:len(previous[0])] == previous[0]:
-            node, done = previous[1], len(previous[0])  # a sequence's tasks see ever longer prefixes
-        for w, pol in writers[done:]:
+        node = self._chain_root(atom, self._bool_chains, self._bool_start)
+        for w, pol in writers:
             step = node.next.get((w, pol))
             if step is None:
                 known_before, true_before = node.value
                 xw = self.x[w]
-                name = f"{atom[0]}({', '.join(atom[1])}) after {self.tg.vertices[w].content}"
+                name = f"{_atom_name(atom)} after {self.tg.vertices[w].content}"
                 value = (self.m.or_of([xw, known_before], f"known {name}"),
                          self.m.or_of([xw, true_before], name) if pol else self.m.and_of([neg(xw), true_before], name))
                 step = node.next[(w, pol)] = _Chain(value)
             node = step
-        self._last_chain[atom] = (key, node)
         return node.value
 
     def _bool_start(self, atom: AtomKey) -> tuple[Lit, Lit]:
@@ -230,7 +224,7 @@ class Encoder:
             if step is None:
                 known, prev_var = node.value
                 xw = self.x[w]
-                name = f"{atom[0]}({', '.join(atom[1])}) after {self.tg.vertices[w].content}"
+                name = f"{_atom_name(atom)} after {self.tg.vertices[w].content}"
                 nxt = self.m.new_int(name, -span, span)
                 self.m.records.append(ValueAfter(xw, known, nxt, prev_var, prev_const, scaled, NumericEffectKind(kind)))
                 step = node.next[(w, kind, scaled)] = _Chain((self.m.or_of([known, xw], f"known {name}"), nxt))
@@ -303,14 +297,14 @@ class Encoder:
         for c in parallel_conflicts(v, self.scopes, self.effects):
             atom = c.atom
             label = self._label(f"conflict:{v}:{atom}", f"parallel tasks below {self.tg.scope(v).goal or 'operator ' + str(v)} "
-                                f"set {atom[0]}({', '.join(atom[1])}) both true and false")
+                                f"set {_atom_name(atom)} both true and false")
             if len(c.setting_true) * len(c.setting_false) <= 16:
                 for a in c.setting_true:
                     for b in c.setting_false:
                         if self.tg.vertices[a].parent != self.tg.vertices[b].parent:
                             self.m.clause([neg(self.x[a]), neg(self.x[b])], label)
             else:
-                fact = f"{atom[0]}({', '.join(atom[1])})"
+                fact = _atom_name(atom)
                 any_pos = self.m.or_of([self.x[a] for a in c.setting_true], f"{fact} set below {v}")
                 any_neg = self.m.or_of([self.x[b] for b in c.setting_false], f"{fact} cleared below {v}")
                 self.m.clause([neg(any_pos), neg(any_neg)], label)
@@ -333,6 +327,11 @@ class _Chain(Generic[V]):
 
     value: V  # (known, true) literals of a fact; (known literal, integer variable) of a number
     next: dict[tuple[Any, ...], "_Chain[V]"] = field(default_factory=dict)
+
+
+def _atom_name(atom: AtomKey) -> str:
+    """``busy(Kitchen)``: an atom as the variable names and explanations show it."""
+    return f"{atom[0]}({', '.join(atom[1])})"
 
 
 def _conjuncts(test: Test) -> Iterable[Test]:
