@@ -300,12 +300,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     mission.progress = _Progress(not args.quiet).stage
     _warn(args, mission)
     # where and how the output goes is settled, and refused if unsafe, before any work
-    if args.output:
-        out_path = Path(args.output)
-    elif folder is not None and not Path(mission.config.output.file_path).is_absolute():
-        out_path = folder / mission.config.output.file_path
-    else:
-        out_path = mission.output_path()
+    out_path = Path(args.output) if args.output else _default_output(mission, folder)
     file_type = _output_format(args, mission)
     if args.json_style == "standard" and file_type != "json":
         raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "

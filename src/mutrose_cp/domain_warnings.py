@@ -22,14 +22,11 @@ from __future__ import annotations
 
 from typing import Iterable
 
-from .errors import Problem, located
+from .errors import Problem, counted, located
 from .io.hddl import signature
 from .model import Domain, GoalModel
 from .model.domain import Action, Declaration, Method
 
-
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def domain_warnings(domain: Domain, goal_model: GoalModel) -> list[Problem]:
@@ -58,7 +55,7 @@ def conflicting_declarations(declarations: Iterable[Declaration], what: str) -> 
     found: list[tuple[int, int, str]] = []
     for declaration in declarations:
         earlier = first.setdefault(declaration.name, declaration)
-        if earlier is declaration or _sorts(earlier) == _sorts(declaration):
+        if earlier is declaration or earlier.sorts == declaration.sorts:
             continue
         found.append((declaration.line, declaration.column,
                       f"{what} '{declaration.name}' is declared again with different parameters: "
@@ -68,9 +65,6 @@ def conflicting_declarations(declarations: Iterable[Declaration], what: str) -> 
                       f"rename one of them"))
     return found
 
-
-def _sorts(declaration: Declaration) -> tuple[str, ...]:
-    return tuple(p.type for p in declaration.parameters)
 
 
 def short_subtask_calls(domain: Domain) -> list[tuple[int, int, str]]:
@@ -84,8 +78,8 @@ def short_subtask_calls(domain: Domain) -> list[tuple[int, int, str]]:
             missing = " ".join(p.name for p in callee.parameters[len(step.args):])
             found.append((step.line, step.column,
                           f"subtask {step.task} in method '{method.name}' is given "
-                          f"{_count(len(step.args), 'argument')} but declares "
-                          f"{_count(len(callee.parameters), 'parameter')}: "
+                          f"{counted(len(step.args), 'argument')} but declares "
+                          f"{counted(len(callee.parameters), 'parameter')}: "
                           f"{signature(callee.name, callee.parameters)}; the decomposer leaves {missing} free, "
                           "standard HDDL readers reject the call: pass one argument per parameter"))
     return found

@@ -67,6 +67,11 @@ class NoDecompositionError(MissionError):
     exit_code = 3
 
 
+def counted(n: int, noun: str) -> str:
+    """``1 argument``, ``2 arguments``: a count in a message."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
 def closest(name: str, candidates: Iterable[str], cutoff: float = 0.75) -> str | None:
     """The candidate closest to a misspelt ``name``, if one is close enough (for "did you mean").
 

@@ -173,9 +173,9 @@ class Mission:
 
     @classmethod
     def load(cls, hddl: str | os.PathLike[str], gm: str | os.PathLike[str], config: str | os.PathLike[str], *,
-             lenient_xml: bool = False, world: str | os.PathLike[str] | None = None) -> "Mission":
+             lenient_xml: bool = False) -> "Mission":
         """Read and validate the four inputs (the world file is named by the configuration, unless
-        ``world`` or :func:`world_file` names another one).
+        :func:`world_file` names another one).
 
         All problems of the three named files are collected before raising, so one run reports
         everything that is wrong."""
@@ -195,7 +195,7 @@ class Mission:
         cfg = attempt(lambda: load_configuration(config, lenient=lenient_xml))
         if problems or domain is None or goal_model is None or cfg is None:
             raise MissionError(problems)
-        chosen = Path(world) if world is not None else _world_file.get()
+        chosen = _world_file.get()
         world_path = chosen if chosen is not None else resolve_config_path(cfg.world_db.path, Path(config))
         ambiguity = "" if chosen is not None else _world_ambiguity(cfg.world_db.path, Path(config), world_path)
         knowledge = load_knowledge(world_path, cfg.world_db.xml_root, cfg.world_db.unique_id, lenient=lenient_xml)

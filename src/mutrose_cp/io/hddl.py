@@ -15,7 +15,7 @@ from typing import Callable, Iterable, cast
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
-from ..errors import MissionError, Problem, closest, located
+from ..errors import MissionError, Problem, closest, counted, located
 from ..model.domain import (
     AbstractTask,
     Action,
@@ -107,9 +107,6 @@ def _expected_phrase(terminals: Iterable[str]) -> str:
         return f"expected {names[0]}, "
     return f"expected one of {', '.join(names)}, "
 
-
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def _end_of_text(text: str) -> tuple[int, int]:
@@ -531,8 +528,8 @@ class _DomainReader:
         elif arity != len(task.parameters):
             self._error(
                 task_name,
-                f"{owner} decomposes '{task_name.value}' with {_count(arity, 'argument')} "
-                f"but the task declares {_count(len(task.parameters), 'parameter')}",
+                f"{owner} decomposes '{task_name.value}' with {counted(arity, 'argument')} "
+                f"but the task declares {counted(len(task.parameters), 'parameter')}",
             )
 
     def _subtasks(self, network: Tree[Token] | None, body: _Body) -> tuple[tuple[Subtask, ...], bool]:
@@ -572,8 +569,8 @@ class _DomainReader:
         elif arity > len(declared.parameters):
             self._error(
                 callee,
-                f"subtask {callee.value} in method '{body.name}' is given {_count(arity, 'argument')} "
-                f"but declares only {_count(len(declared.parameters), 'parameter')}: "
+                f"subtask {callee.value} in method '{body.name}' is given {counted(arity, 'argument')} "
+                f"but declares only {counted(len(declared.parameters), 'parameter')}: "
                 f"{signature(declared.name, declared.parameters)}; remove the extra arguments",
             )
 
@@ -624,7 +621,7 @@ class _DomainReader:
             signatures = " or ".join(signature(d.name, d.parameters) for d in matching)
             self._error(
                 name,
-                f"{what} '{name.value}' is used with {_count(arity, 'argument')} in {body.kind} "
+                f"{what} '{name.value}' is used with {counted(arity, 'argument')} in {body.kind} "
                 f"'{body.name}' but is declared with {declared}: {signatures}; pass one argument "
                 "per declared parameter",
             )

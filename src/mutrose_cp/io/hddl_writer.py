@@ -43,6 +43,7 @@ from ..model.domain import (
     Precondition,
     Subtask,
 )
+from .hddl import signature
 
 STANDARD_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_-]*\Z")
 """A name every standard HDDL reader accepts (MutRoSe also allows ``|``)."""
@@ -176,15 +177,14 @@ class HddlExport:
 
     def _merged_parameters(self, declarations: Sequence[Declaration]) -> list[Parameter]:
         first = declarations[0]
-        if all(_sorts(d) == _sorts(first) for d in declarations):
+        if all(d.sorts == first.sorts for d in declarations):
             return list(first.parameters)
         parameters = [Parameter(p.name, self._common_supertype(d.parameters[i].type for d in declarations))
                       for i, p in enumerate(first.parameters)]
-        variants = " and ".join(_atom(first.name, [f"{p.name} - {p.type}" for p in d.parameters])
-                                for d in declarations)
+        variants = " and ".join(signature(first.name, d.parameters) for d in declarations)
         self.warnings.append(f"{self.domain.source}:{first.line}:{first.column}: predicate '{first.name}' is "
                              f"declared as {variants}: declared once as "
-                             f"{_atom(first.name, [f'{p.name} - {p.type}' for p in parameters])}")
+                             f"{signature(first.name, parameters)}")
         return parameters
 
     def _conditions(self) -> list[Precondition]:
@@ -374,9 +374,6 @@ def _grouped(items: Iterable[tuple[str, str]]) -> list[str]:
         by_type.setdefault(sort, []).append(name)
     return [f"{' '.join(names)} - {sort}" for sort, names in by_type.items()]
 
-
-def _sorts(declaration: Declaration) -> tuple[str, ...]:
-    return tuple(p.type for p in declaration.parameters)
 
 
 def _unique(declarations: Iterable[Declaration]) -> list[Declaration]:

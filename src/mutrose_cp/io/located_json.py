@@ -19,7 +19,7 @@ from lark import Token, Tree
 
 from ..errors import MissionError, Problem, located
 from .grammar import cached_lalr_parser
-from .text import decode_utf8, json_depth_problem, json_syntax_problem, read_bytes
+from .text import decode_utf8, parse_json, read_bytes
 
 Path = tuple[str | int, ...]
 
@@ -57,13 +57,9 @@ def read_located_json(path: str | os.PathLike[str], what: str) -> LocatedJson:
 def parse_located_json(text: str, source: str) -> LocatedJson:
     """Decode ``text``; ``NaN`` and ``Infinity``, which are not JSON, are syntax errors."""
     try:
-        data = json.loads(text, parse_constant=_constant)
-    except json.JSONDecodeError as err:
-        raise MissionError(json_syntax_problem(err, text, source)) from None
-    except ValueError as err:  # NaN, Infinity
+        data = parse_json(text, source, parse_constant=_constant)
+    except ValueError as err:  # NaN, Infinity (parse_json has located the syntax errors)
         raise MissionError(Problem(_constant_at(text, source), f"invalid JSON: {err}")) from None
-    except RecursionError:
-        raise MissionError(json_depth_problem(text, source)) from None
     tree = cached_lalr_parser("json.lark", propagate_positions=True, maybe_placeholders=False).parse(text)
     values: dict[Path, tuple[int, int]] = {}
     keys: dict[Path, tuple[int, int]] = {}

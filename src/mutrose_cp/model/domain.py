@@ -66,6 +66,11 @@ class Declaration:
     line: int = field(default=0, compare=False)
     column: int = field(default=0, compare=False)
 
+    @property
+    def sorts(self) -> tuple[str, ...]:
+        """The parameters' types: what two declarations of one name must agree on."""
+        return tuple(p.type for p in self.parameters)
+
 
 @dataclass(frozen=True)
 class AbstractTask:
