@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Callable
 from .bounds import LpBound, lp_bound
 from .fleet import Fleet
 from .load import LoadBound, load_bound
-from .model import AllocationModel, build_model
+from .model import AllocationModel, build_model, literal_value
 from .options import AllocationOptions
 from .problem import AllocationProblem, build_problem
 from .schedule import Schedule, compact
@@ -124,13 +124,9 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
 
 def _schedule(am: AllocationModel, values: list[int]) -> Schedule:
     """The schedule of a solution (``values`` by proto variable index), compacted."""
-    def true(literal: object) -> bool:
-        index = literal.index  # type: ignore[attr-defined]
-        return bool(values[index]) if index >= 0 else not values[-index - 1]
-
     problem, dm = am.problem, am.problem.dm
-    jobs = [j for j in problem.jobs if true(dm.decomposition[j])]
-    teams = {j: tuple(r for r in am.restriction.robots_of(problem, j) if true(am.assign[(j, r)])) for j in jobs}
+    jobs = [j for j in problem.jobs if literal_value(values, dm.decomposition[j])]
+    teams = {j: tuple(r for r in am.restriction.robots_of(problem, j) if literal_value(values, am.assign[(j, r)])) for j in jobs}
     start = {j: values[am.start[j].index] for j in jobs}
     end = {j: values[am.end[j].index] for j in jobs}
     return compact(problem, jobs, teams, start, end)

@@ -35,12 +35,10 @@ Expr = tuple[dict[int, float], float]  # a linear expression: coefficients by co
 
 @dataclass(frozen=True)
 class LpBound:
-    """The LP optimum (``None`` when Clarabel did not solve it) and the LP's size."""
+    """The LP optimum (``None`` when Clarabel did not solve it), Clarabel's status and time."""
 
     value: float | None
     status: str
-    variables: int
-    rows: int
     seconds: float
 
 
@@ -255,10 +253,10 @@ def _solve(lp: _Lp, goal: list[tuple[float, Expr]], started: float, time_limit: 
     if time_limit is not None:
         left = time_limit - (time.perf_counter() - started)
         if left <= 0:
-            return LpBound(None, "MaxTime", n, len(rows), time.perf_counter() - started)
+            return LpBound(None, "MaxTime", time.perf_counter() - started)
         settings.time_limit = left
     solution = clarabel.DefaultSolver(sp.csc_matrix((n, n)), q, a, np.array(rhs, dtype=float), cones, settings).solve()
     status = str(solution.status)
     # the solver's tolerance, taken off so that the bound stays a bound
     value = float(solution.obj_val) - 1e-6 * max(1.0, abs(solution.obj_val)) if status == "Solved" else None
-    return LpBound(value, status, n, len(rows), time.perf_counter() - started)
+    return LpBound(value, status, time.perf_counter() - started)

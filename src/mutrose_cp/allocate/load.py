@@ -27,10 +27,11 @@ from typing import Any
 
 from ortools.sat.python import cp_model
 
+from ..solve.embedding import cp_literal
 from ..solve.native import cmh
 
 from .fleet import Robot
-from .model import horizon
+from .model import horizon, literal_value
 from .options import Objective
 from .problem import AllocationProblem, Job
 
@@ -70,7 +71,7 @@ def load_bound(problem: AllocationProblem, objective: Objective, time_limit: flo
         m.proto.solution_hint.values.append(value)
     lighter = _solve(m, max(0.0, time_limit - (time.perf_counter() - started)), workers, seed)
     solutions = [values] + ([list(lighter.solution)] if lighter.status in (OPTIMAL, FEASIBLE) else [])
-    picked = tuple([d for d, literal in chosen.items() if _true(solution, literal)] for solution in solutions)
+    picked = tuple([d for d, literal in chosen.items() if literal_value(solution, literal)] for solution in solutions)
     return LoadBound(bound, status, picked, time.perf_counter() - started)
 
 
@@ -79,10 +80,10 @@ def _relaxation(problem: AllocationProblem, objective: Objective
     """The relaxed model on a copy of the decomposition model, the literals of the jobs and the
     relaxed objective."""
     m = problem.dm.model.clone()
-    chosen = {d: _literal(m, problem.dm.decomposition[d]) for d in problem.jobs}
+    chosen = {d: cp_literal(m, problem.dm.decomposition[d].index) for d in problem.jobs}
     for d in problem.dm.decomposition:
         if d not in problem.jobs or len(problem.jobs[d].candidates) < problem.jobs[d].robots.min:
-            m.add_bool_or([_literal(m, problem.dm.decomposition[d]).Not()])
+            m.add_bool_or([cp_literal(m, problem.dm.decomposition[d].index).Not()])
     _shared_robots(m, problem, chosen)
     longest = horizon(problem)  # the joint model's: every schedule of it fits, so the bound stays one
     makespan = m.new_int_var(0, longest, "load_makespan")
@@ -104,18 +105,6 @@ def _solve(m: cp_model.CpModel, time_limit: float, workers: int, seed: int) -> c
     parameters.random_seed = seed
     return run_solver(m.proto, accept=(OPTIMAL, FEASIBLE, INFEASIBLE, cmh.CpSolverStatus.UNKNOWN),
                       parameters=parameters, what="the load relaxation")
-
-
-def _literal(m: cp_model.CpModel, literal: object) -> Any:
-    """The literal of the original model in its copy ``m`` (same proto indices)."""
-    index = literal.index  # type: ignore[attr-defined]
-    var = m.get_bool_var_from_proto_index(index if index >= 0 else -index - 1)
-    return var if index >= 0 else var.Not()
-
-
-def _true(values: Any, literal: Any) -> bool:
-    index = literal.index
-    return bool(values[index]) if index >= 0 else not values[-index - 1]
 
 
 def pools(problem: AllocationProblem) -> list[frozenset[str]]:

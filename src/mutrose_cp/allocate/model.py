@@ -25,10 +25,12 @@ redundant ``work + travel <= makespan`` gives CP-SAT's relaxation the energy arg
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any, Sequence
 from graphlib import CycleError, TopologicalSorter
 
 from ortools.sat.python import cp_model
 
+from ..solve.proto import negated
 from .fleet import Robot
 from .neighbourhood import Restriction
 from .options import Objective
@@ -235,3 +237,9 @@ def _ruled_out_arcs(problem: AllocationProblem) -> set[tuple[str, str]]:
     for group in by_task.values():
         ruled.update((a, b) for a in group for b in group if a != b)
     return ruled
+
+
+def literal_value(values: Sequence[int], literal: Any) -> bool:
+    """The value of a model literal in a solution given by proto variable index."""
+    index = literal.index
+    return bool(values[index]) if index >= 0 else not values[negated(index)]

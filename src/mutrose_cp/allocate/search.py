@@ -59,7 +59,6 @@ class SearchLimits:
 @dataclass(frozen=True)
 class SearchOutcome:
     status: str  # "OPTIMAL" or "FEASIBLE"
-    objective: int
     bound: float  # CP-SAT's proven lower bound on the objective
     values: list[int]  # the solution, by proto variable index
     seconds: float
@@ -110,7 +109,7 @@ def search(am: AllocationModel, limits: SearchLimits,
     if response.status == INFEASIBLE:
         raise _no_allocation(am)
     return SearchOutcome("OPTIMAL" if response.status == OPTIMAL else "FEASIBLE",
-                         round(response.objective_value), response.best_objective_bound, list(response.solution),
+                         response.best_objective_bound, list(response.solution),
                          time.monotonic() - started)
 
 

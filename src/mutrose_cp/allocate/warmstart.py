@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass
-from graphlib import CycleError, TopologicalSorter
+from graphlib import TopologicalSorter
 from typing import Sequence
 
 from ..errors import MissionError
@@ -85,11 +85,6 @@ def _decomposition_values(problem: AllocationProblem, chosen: set[str]) -> list[
     return None if response.status == INFEASIBLE else list(response.solution)
 
 
-def add_hint(am: AllocationModel, warm: WarmStart) -> None:
-    """Hint ``warm`` to CP-SAT."""
-    _hint(am, warm)
-
-
 def least_work_decomposition(problem: AllocationProblem) -> list[str] | None:
     """The valid mission decomposition with the least total work (ids, in mission order)."""
     mission = problem.dm.mission
@@ -109,8 +104,6 @@ def least_work_decomposition(problem: AllocationProblem) -> list[str] | None:
 def greedy_plan(problem: AllocationProblem, chosen: list[str]) -> Plan | None:
     """Teams and start times for ``chosen`` by list scheduling (see the module docstring), None
     when stuck."""
-    if _precedence_order(problem, chosen) is None:
-        return None
     return _ListScheduler(problem, chosen).run()
 
 
@@ -183,22 +176,6 @@ class _ListScheduler:
             self.place[r] = job.location or self.place[r]
 
 
-def _precedence_order(problem: AllocationProblem, chosen: list[str]) -> list[str] | None:
-    before = chosen_predecessors(problem, set(chosen))
-    sorter = TopologicalSorter({j: before[j] for j in chosen})
-    try:
-        sorter.prepare()
-    except CycleError:
-        return None
-    position = {j: i for i, j in enumerate(problem.jobs)}
-    order: list[str] = []
-    while sorter.is_active():
-        ready = sorted(sorter.get_ready(), key=position.__getitem__)
-        order += ready
-        sorter.done(*ready)
-    return order
-
-
 def _partners(problem: AllocationProblem, chosen: set[str]) -> dict[str, list[str]]:
     out: dict[str, list[str]] = {}
     for a, b in problem.same_robots:
@@ -208,7 +185,7 @@ def _partners(problem: AllocationProblem, chosen: set[str]) -> dict[str, list[st
     return out
 
 
-def _hint(am: AllocationModel, warm: WarmStart) -> None:
+def add_hint(am: AllocationModel, warm: WarmStart) -> None:
     """Every variable of the model, from the warm start (a complete hint is one CP-SAT can take
     as its first solution without a search)."""
     m, problem = am.model, am.problem

@@ -60,7 +60,7 @@ class DecompositionInfo:
     robot_number: RobotNumber  # fixed n (min == max, fixed) or a range [min, max]
 
 
-def _cp_literal(model: cp_model.CpModel, ref: int) -> CpLiteral:
+def cp_literal(model: cp_model.CpModel, ref: int) -> CpLiteral:
     """The ``CpModel`` literal of proto literal ``ref`` (``-index - 1`` is a negation).
 
     Constants are proto variables too (one per value), so every literal of the maps, constant
@@ -131,7 +131,7 @@ class DecompositionModel:
         def lit(l: Lit) -> CpLiteral:
             ref = builder.lit(l)
             if ref not in made:
-                made[ref] = _cp_literal(model, ref)
+                made[ref] = cp_literal(model, ref)
             return made[ref]
 
         decomposition: dict[str, CpLiteral] = {}
