@@ -31,7 +31,7 @@ import signal
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Mapping, Sequence
+from typing import IO, TYPE_CHECKING, Iterable, Mapping, Sequence
 
 from . import console
 from .errors import MissionError
@@ -144,12 +144,17 @@ def run(inv: Invocation, out: IO[str] | None = None) -> int:
         console.print_constraints(tg, constraints, out)
     with phase("solving"):
         result = mission.decompose(_every_decomposition(inv.algorithm))
-        decompositions = list(result.decompositions)
-    if inv.verbose:
-        console.print_constraints(tg, constraints, out)
-        console.print_trace_decompositions(tg, decompositions, out)
-    if inv.pretty:
-        console.print_mission_decompositions(tg, decompositions, out)
+    decompositions: Iterable[list[int]] = result.decompositions
+    # listed in memory only when read more than once (the prints, the iHTN counting); the output
+    # file alone streams them
+    if inv.verbose or inv.pretty or inv.ihtn:
+        listed = list(decompositions)
+        if inv.verbose:
+            console.print_constraints(tg, constraints, out)
+            console.print_trace_decompositions(tg, listed, out)
+        if inv.pretty:
+            console.print_mission_decompositions(tg, listed, out)
+        decompositions = listed
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state)
     if inv.ihtn:
         _write_ihtns(model, inv.ihtn_max)

@@ -37,12 +37,16 @@ class Measurement:
     """How one run of a command went.  ``exit_status`` is None when the run was killed at the
     time limit; it is negative (``-signal``) when a signal ended the child."""
 
-    timed_out: bool
     exit_status: int | None
     seconds: float
     peak_mb: float
     stdout: str
     stderr: str
+
+    @property
+    def timed_out(self) -> bool:
+        """Killed at the time limit (or on a cancel): no exit status, no result."""
+        return self.exit_status is None
 
     @property
     def succeeded(self) -> bool:
@@ -109,5 +113,5 @@ def run_measured(command: Sequence[str], cwd: str | os.PathLike[str], time_limit
         if ended is not None:
             status, usage = ended
             child.returncode = os.waitstatus_to_exitcode(status)
-        return Measurement(timed_out=ended is None, exit_status=None if ended is None else child.returncode,
+        return Measurement(exit_status=None if ended is None else child.returncode,
                            seconds=seconds, peak_mb=_peak_mb(usage), stdout=_text(out), stderr=_text(err))

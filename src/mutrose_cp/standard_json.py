@@ -18,7 +18,7 @@ from typing import IO, Any, Iterable, Mapping
 
 from .constraints import EC, SEQ, Constraint
 from .model.task_graph import Decomposition
-from .output import OutputBuilder, SplitListing
+from .output import OutputBuilder
 
 
 def _dumps(value: Any, indent: int) -> str:
@@ -57,11 +57,7 @@ def _space(space: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _decompositions(builder: OutputBuilder) -> Iterable[list[str]]:
-    listed = builder.m.decompositions
-    if isinstance(listed, SplitListing):
-        prefix = [builder.key[d] for d in listed.prefix]
-        return (prefix + [builder.key[d] for d in part] for part in listed.parts)
-    return ([builder.key[d] for d in md] for md in listed)
+    return ([builder.key[d] for d in md] for md in builder.m.decompositions)
 
 
 def _write_items(fh: IO[str], items: Iterable[str], opening: str, closing: str) -> None:
