@@ -9,7 +9,6 @@ import argparse
 import json
 import math
 import shutil
-import signal
 import sys
 import time
 from collections import Counter
@@ -20,12 +19,12 @@ from . import __version__
 from .batch.command import add_batch_parser
 from .errors import MissionError, Problem
 from .ihtn import DEFAULT_MAX_FILES
-from .interrupt import Interrupted, phase, signal_handlers
+from .interrupt import phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files, world_file
 from .output_file import refuse_unsafe_outputs, written_together
-from .process import (Failure, command_settings, exit_process, failure_lines, failure_problems, failure_status,
-                      reader_gone, usable_stderr)
+from .process import (FAILURES, Failure, command_settings, exit_process, failure_lines, failure_problems,
+                      failure_status, prepare_process, reader_gone)
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
 
@@ -646,11 +645,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    usable_stderr()
-    if hasattr(signal, "SIGXFSZ"):
-        # over a file-size limit, a write fails with EFBIG (a located error) instead of the
-        # signal killing the process
-        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    prepare_process()
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -663,7 +658,7 @@ def _main(argv: Sequence[str] | None) -> int:
         with signal_handlers(), input_limit(args.max_input_mb * MB), world_file(getattr(args, "world", None)):
             status: int = args.func(args)
             return status
-    except (Interrupted, MissionError, RecursionError, OSError) as err:
+    except FAILURES as err:
         status = _report(err)
         if getattr(args, "json_summary", False):
             print(json.dumps({"command": args.command, "ok": False, "status": status, "problems": _problems(err)},

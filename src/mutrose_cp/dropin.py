@@ -27,20 +27,18 @@ original's explicit combination instead.
 from __future__ import annotations
 
 import os
-import signal
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Iterable, Mapping, Sequence
 
 from . import console
-from .errors import MissionError
 from .ihtn import DEFAULT_MAX_FILES
-from .interrupt import Interrupted, phase, signal_handlers
+from .interrupt import phase, signal_handlers
 from .io.text import MB, input_limit
 from .output_file import refuse_unsafe_outputs
-from .process import (Failure, command_settings, exit_process, failure_lines, failure_status, reader_gone,
-                      usable_stderr)
+from .process import (FAILURES, Failure, command_settings, exit_process, failure_lines, failure_status,
+                      prepare_process, reader_gone)
 from .solve.decompose import Algorithm, DecompositionRequest
 
 if TYPE_CHECKING:  # imported when the command runs
@@ -205,9 +203,7 @@ def _report(err: Failure) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``mutrose`` with ``argv`` (without the program name) and return its exit status."""
     with command_settings():
-        usable_stderr()
-        if hasattr(signal, "SIGXFSZ"):
-            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write over a size limit fails with EFBIG
+        prepare_process()
         try:
             return _command(sys.argv[1:] if argv is None else list(argv))
         except BrokenPipeError:
@@ -226,7 +222,7 @@ def _command(argv: list[str]) -> int:
             return run(inv)
     except BrokenPipeError:
         raise
-    except (Interrupted, MissionError, RecursionError, OSError) as err:
+    except FAILURES as err:
         return _report(err)
 
 

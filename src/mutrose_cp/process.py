@@ -37,6 +37,17 @@ def command_settings() -> Iterator[None]:
             gc.enable()
 
 
+FAILURES = (Interrupted, MissionError, RecursionError, OSError)  # Failure, for ``except``
+
+
+def prepare_process() -> None:
+    """What both front ends set up first: a usable stderr, and writes over a file-size limit
+    failing with EFBIG (a located error) instead of the signal killing the process."""
+    usable_stderr()
+    if hasattr(signal, "SIGXFSZ"):
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+
+
 def usable_stderr() -> None:
     """Started with stderr closed, messages go nowhere rather than failing the command."""
     try:
