@@ -7,106 +7,22 @@ never leaves a half-written output.
 """
 from __future__ import annotations
 
-import functools
 import os
-import re
 from dataclasses import dataclass
-from typing import IO, Any, Iterable, Iterator, Mapping, Sequence, TypeAlias
+from typing import IO, TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
 
+from .boost_json import Tree, _write_list, boost_json, write_boost_json
 from .constraints import EC, SEQ, Constraint
+from .entry_templates import EntryTemplates
 from .errors import MissionError
 from .model import Configuration, Domain, InitialState, Literal, SemanticMapping
 from .output_file import atomic_writer
 from .model.task_graph import Decomposition, TaskGraph
 
-# a JSON value as PropertyTree holds it: every scalar is a string
-Tree: TypeAlias = "str | Sequence[Tree] | Mapping[str, Tree]"
+if TYPE_CHECKING:
+    from .htn import GroundPredicates
 
-
-# ---------------------------------------------------------------------------------------------
-# Boost-compatible JSON
-
-
-_PLAIN = re.compile(r'[ !#-.0-\[\]-~]*')  # printable ASCII except " / \\
-
-
-_ESCAPES = {'"': '\\"', "\\": "\\\\", "/": "\\/", "\b": "\\b", "\f": "\\f", "\n": "\\n", "\r": "\\r",
-            "\t": "\\t"}
-
-
-@functools.lru_cache(maxsize=1 << 16)
-def _escape(s: str) -> str:
-    """Boost's JSON string escaping: named escapes, then every other byte outside printable
-    ASCII as ``\\u00XX`` (per UTF-8 byte, as Boost does).  Memoized: names, types and flags
-    repeat across thousands of task entries."""
-    if _PLAIN.fullmatch(s):
-        return '"' + s + '"'
-    out = []
-    for ch in s:
-        if ch in _ESCAPES:
-            out.append(_ESCAPES[ch])
-        elif ord(ch) < 0x20 or ord(ch) > 0x7E:
-            out.extend(f"\\u00{b:02X}" for b in ch.encode("utf-8"))
-        else:
-            out.append(ch)
-    return '"' + "".join(out) + '"'
-
-
-def _boost_parts(tree: Tree, indent: int, out: list[str]) -> None:
-    """Append the pieces of ``tree``; string members are written inline (most of a task entry's
-    leaves), which halves the calls on large outputs."""
-    if isinstance(tree, str):
-        out.append(_escape(tree))
-        return
-    if not tree:
-        out.append('""')
-        return
-    pad = " " * (indent + 4)
-    if isinstance(tree, dict):
-        out.append("{\n")
-        for k, v in tree.items():
-            if isinstance(v, str):
-                out.append(f"{pad}{_escape(k)}: {_escape(v)},\n")
-            else:
-                out.append(f"{pad}{_escape(k)}: ")
-                _boost_parts(v, indent + 4, out)
-                out.append(",\n")
-    else:
-        out.append("[\n")
-        for v in tree:
-            if isinstance(v, str):
-                out.append(f"{pad}{_escape(v)},\n")
-            else:
-                out.append(pad)
-                _boost_parts(v, indent + 4, out)
-                out.append(",\n")
-    last = out[-1]
-    out[-1] = last[:-2] + "\n"  # no comma after the last member
-    out.append(" " * indent + ("}" if isinstance(tree, dict) else "]"))
-
-
-def boost_json(tree: Tree, indent: int = 0) -> str:
-    """Serialize like ``boost::property_tree::write_json`` (pretty): every scalar a string,
-    empty containers as ``""``, 4-space indentation."""
-    out: list[str] = []
-    _boost_parts(tree, indent, out)
-    return "".join(out)
-
-
-def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
-    fh.write(boost_json(tree, indent))
-
-
-def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
-    """A JSON list whose elements are already serialized at ``indent + 4``; streamed."""
-    first = True
-    pad = " " * (indent + 4)
-    for item in items:
-        fh.write("[\n" if first else ",\n")
-        fh.write(pad)
-        fh.write(item)
-        first = False
-    fh.write('""' if first else "\n" + " " * indent + "]")
+__all__ = ["OutputBuilder", "OutputModel", "SplitListing", "Tree", "boost_json", "write_boost_json", "write_output"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -128,7 +44,10 @@ class PredicatePrinter:
         self.config = config
         self.sorts = state.sorts
 
-    def _mapping(self, lit: Literal, types: Mapping[str, str]) -> SemanticMapping | None:
+    def _mapping(self, lit: Literal, types: Mapping[str, str],
+                 real: Mapping[str, str] | None = None) -> SemanticMapping | None:
+        """The first attribute mapping whose argument sorts fit ``lit`` (a ground argument fits a
+        sort it belongs to; ``real`` names the value a placeholder stands for)."""
         for m in self.config.semantic_mapping:
             if m.pred != lit.predicate or len(m.arg_sorts) < len(lit.args):
                 continue
@@ -139,15 +58,16 @@ class PredicatePrinter:
                     if t is None or (sort != t and sort != self.domain.parent_of.get(t)):
                         ok = False
                         break
-                elif arg not in self.sorts.get(sort, ()):
+                elif (real.get(arg, arg) if real else arg) not in self.sorts.get(sort, ()):
                     ok = False
                     break
             if ok:
                 return m
         return None
 
-    def render(self, lit: Literal, types: Mapping[str, str], dec: Decomposition, kind: str) -> PrintedPredicate | None:
-        m = self._mapping(lit, types)
+    def render(self, lit: Literal, types: Mapping[str, str], dec: Decomposition,
+               real: Mapping[str, str] | None = None) -> PrintedPredicate | None:
+        m = self._mapping(lit, types, real)
         if m is None:
             robot_typed = any(a.startswith("?") and types.get(a) in ("robot", "robotteam") for a in lit.args)
             if any(a.startswith("?") for a in lit.args) and robot_typed:
@@ -167,11 +87,15 @@ class PredicatePrinter:
         first = lit.args[0] if lit.args else ""
         return PrintedPredicate(f"{prefix}{first}.{m.name}", lit.args, sorts)
 
-    def printed(self, dec: Decomposition) -> tuple[list[PrintedPredicate], list[PrintedPredicate]]:
+    def printed(self, dec: Decomposition, predicates: GroundPredicates | None = None,
+                real: Mapping[str, str] | None = None) -> tuple[list[PrintedPredicate], list[PrintedPredicate]]:
+        """The preconditions and effects of ``dec`` as printed (of ``predicates`` instead, a
+        grounding with placeholders whose values ``real`` names: see ``entry_templates``)."""
+        grounded = predicates if predicates is not None else dec.predicates
         task = self.domain.task_by_name[dec.instance.name]
         types = {p.name: p.type for p in task.parameters}
-        pre = [self.render(c, types, dec, "precondition") for c in dec.predicates.preconditions if isinstance(c, Literal)]
-        eff = [self.render(e, types, dec, "effect") for e in dec.predicates.effects]
+        pre = [self.render(c, types, dec, real) for c in grounded.preconditions if isinstance(c, Literal)]
+        eff = [self.render(e, types, dec, real) for e in grounded.effects]
         return [p for p in pre if p is not None], [e for e in eff if e is not None]
 
 
@@ -272,8 +196,9 @@ class OutputBuilder:
         if self.decs:
             fh.write("{\n")
             last = len(self.decs) - 1
+            templates = EntryTemplates(self.m.domain, self.printer, self.m.state.sorts)
             for i, d in enumerate(self.decs):
-                entry = boost_json(self.task_entry(d.decomposition, d.group, d.divisible), 8)
+                entry = templates.entry(d.decomposition, d.group, d.divisible)
                 fh.write(f'        "{self.key[d.index]}": {entry}' + (",\n" if i < last else "\n"))
             fh.write("    }")
         else:

@@ -1,0 +1,99 @@
+"""JSON exactly as Boost.PropertyTree's ``write_json`` writes it: every scalar a string, empty
+containers as ``""``, ``\\/`` escapes, 4-space layout.  The original's readers (a simulator, an
+editor plug-in, a mission controller) parse this dialect, so every writer of it goes through here.
+"""
+from __future__ import annotations
+
+import functools
+import itertools
+import re
+from typing import IO, Iterable, Mapping, Sequence, TypeAlias
+
+# a JSON value as PropertyTree holds it: every scalar is a string
+Tree: TypeAlias = "str | Sequence[Tree] | Mapping[str, Tree]"
+
+
+_PLAIN = re.compile(r'[ !#-.0-\[\]-~]*')  # printable ASCII except " / \\
+
+
+_ESCAPES = {'"': '\\"', "\\": "\\\\", "/": "\\/", "\b": "\\b", "\f": "\\f", "\n": "\\n", "\r": "\\r",
+            "\t": "\\t"}
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _escape(s: str) -> str:
+    """Boost's JSON string escaping: named escapes, then every other byte outside printable
+    ASCII as ``\\u00XX`` (per UTF-8 byte, as Boost does).  Memoized: names, types and flags
+    repeat across thousands of task entries."""
+    if _PLAIN.fullmatch(s):
+        return '"' + s + '"'
+    out = []
+    for ch in s:
+        if ch in _ESCAPES:
+            out.append(_ESCAPES[ch])
+        elif ord(ch) < 0x20 or ord(ch) > 0x7E:
+            out.extend(f"\\u00{b:02X}" for b in ch.encode("utf-8"))
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _boost_parts(tree: Tree, indent: int, out: list[str]) -> None:
+    """Append the pieces of ``tree``; string members are written inline (most of a task entry's
+    leaves), which halves the calls on large outputs."""
+    if isinstance(tree, str):
+        out.append(_escape(tree))
+        return
+    if not tree:
+        out.append('""')
+        return
+    pad = " " * (indent + 4)
+    if isinstance(tree, dict):
+        out.append("{\n")
+        for k, v in tree.items():
+            if isinstance(v, str):
+                out.append(f"{pad}{_escape(k)}: {_escape(v)},\n")
+            else:
+                out.append(f"{pad}{_escape(k)}: ")
+                _boost_parts(v, indent + 4, out)
+                out.append(",\n")
+    else:
+        out.append("[\n")
+        for v in tree:
+            if isinstance(v, str):
+                out.append(f"{pad}{_escape(v)},\n")
+            else:
+                out.append(pad)
+                _boost_parts(v, indent + 4, out)
+                out.append(",\n")
+    last = out[-1]
+    out[-1] = last[:-2] + "\n"  # no comma after the last member
+    out.append(" " * indent + ("}" if isinstance(tree, dict) else "]"))
+
+
+def boost_json(tree: Tree, indent: int = 0) -> str:
+    """Serialize like ``boost::property_tree::write_json`` (pretty): every scalar a string,
+    empty containers as ``""``, 4-space indentation."""
+    out: list[str] = []
+    _boost_parts(tree, indent, out)
+    return "".join(out)
+
+
+def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
+    fh.write(boost_json(tree, indent))
+
+
+def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
+    """A JSON list whose elements are already serialized at ``indent + 4``; streamed, a few
+    thousand elements per write (a large output lists a million constraints)."""
+    pad = " " * (indent + 4)
+    separator = ",\n" + pad
+    elements = iter(items)
+    first = next(elements, None)
+    if first is None:
+        fh.write('""')
+        return
+    fh.write("[\n" + pad + first)
+    while chunk := list(itertools.islice(elements, 4096)):
+        fh.write(separator + separator.join(chunk))
+    fh.write("\n" + " " * indent + "]")

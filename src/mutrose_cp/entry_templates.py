@@ -1,0 +1,187 @@
+"""Task entries of the Boost JSON output, formatted once per template.
+
+The forAll instances of a large mission give task entries that are equal up to renaming: the same
+abstract task, decomposition path and printed predicates, with another room and other patients.
+Most of an entry depends on the task or the path alone (its name, arguments, actions) and is
+formatted once.  The printed preconditions and effects depend on the values too: they are
+grounded with placeholders (one per distinct value, so that equal values stay equal), printed and
+formatted once per template, and each instance puts its own values into the slots.
+
+A template is keyed by everything printing reads besides the values' names: the task, the path,
+which parameter holds which slot, and the sorts each value belongs to (an attribute mapping is
+chosen by sort).  A value that is also a constant of the path is kept as itself.  The first
+instance of every template is formatted both ways and compared; a template that would not give
+the same bytes (which no known input does) is not used.
+"""
+from __future__ import annotations
+
+import re
+from typing import TYPE_CHECKING, Callable, Hashable, Mapping
+
+from .boost_json import _escape, boost_json
+from .htn import ground_path
+
+if TYPE_CHECKING:
+    from .expansion import Value
+    from .htn import DecompositionPath
+    from .model import Domain, RobotNumber
+    from .model.task_graph import Decomposition
+    from .output import PredicatePrinter, PrintedPredicate
+
+PAD = " " * 12  # a task entry's members, inside "tasks" at indent 8
+_SLOT_MARK = "\x1f"  # placeholders are "\x1f<k>\x1f": a control character no name contains
+_SLOT = re.compile(r"\\u001F(\d+)\\u001F")  # ... as Boost escapes it
+
+
+def _member(key: str, text: str) -> str:
+    return f'{PAD}"{key}": {text}'
+
+
+def _pred_tree(p: PrintedPredicate) -> dict[str, str]:
+    return {"predicate": p.text, "vars": p.args[-1] if p.args else "", "var_types": p.sorts[-1] if p.sorts else ""}
+
+
+def predicate_members(printed: tuple[list[PrintedPredicate], list[PrintedPredicate]]) -> str:
+    """The ``preconditions`` and ``effects`` members of an entry."""
+    pre, eff = printed
+    return (_member("preconditions", boost_json([_pred_tree(p) for p in pre], 12)) + ",\n"
+            + _member("effects", boost_json([_pred_tree(e) for e in eff], 12)))
+
+
+class _Template:
+    """Formatted text with slots: ``parts[0] + v[slots[0]] + parts[1] + ...``."""
+
+    def __init__(self, text: str) -> None:
+        pieces = _SLOT.split(text)
+        self.parts = pieces[0::2]
+        self.slots = [int(k) for k in pieces[1::2]]
+
+    def fill(self, escaped: list[str]) -> str:
+        parts, out = self.parts, [self.parts[0]]
+        for i, k in enumerate(self.slots, start=1):
+            out.append(escaped[k])
+            out.append(parts[i])
+        return "".join(out)
+
+
+class EntryTemplates:
+    """Formats task entries, sharing the work between the instances of a template."""
+
+    def __init__(self, domain: Domain, printer: PredicatePrinter, sorts: Mapping[str, frozenset[str]]) -> None:
+        self.domain = domain
+        self.printer = printer
+        self.sorts = sorts
+        self._heads: dict[str, str] = {}
+        self._actions: dict[int, tuple[DecompositionPath, str, frozenset[str]]] = {}
+        self._small: dict[Hashable, str] = {}
+        self._sort_of: dict[str, tuple[str, ...]] = {}
+        self._predicates: dict[Hashable, _Template | None] = {}
+
+    # -- parts that depend on the task or the path only ----------------------------------------
+    def _head(self, name: str) -> str:
+        """The ``name`` and ``arguments`` members."""
+        head = self._heads.get(name)
+        if head is None:
+            task = self.domain.task_by_name[name]
+            head = self._heads[name] = (_member("name", _escape(name)) + ",\n" + _member(
+                "arguments", boost_json({p.name: p.type for p in task.parameters}, 12)))
+        return head
+
+    def _path(self, path: DecompositionPath) -> tuple[str, frozenset[str]]:
+        """The ``decomposition`` member and the constants the path's steps name."""
+        known = self._actions.get(id(path))
+        if known is None:
+            actions = {f"a{i}": {"name": s.name, "arguments": " ".join(s.args)} for i, s in enumerate(path.actions)}
+            constants = frozenset(a for s in path.steps for c in (*s.preconditions, *s.effects, *s.numeric_effects)
+                                  for a in c.args if not a.startswith("?"))
+            known = self._actions[id(path)] = (path, _member("decomposition", boost_json(actions, 12)), constants)
+        return known[1], known[2]
+
+    def _cached(self, key: Hashable, make: Callable[[], str]) -> str:
+        text = self._small.get(key)
+        if text is None:
+            text = self._small[key] = make()
+        return text
+
+    def _robots(self, rn: RobotNumber) -> str:
+        tree = ({"fixed": "True", "num": str(rn.min)} if rn.fixed
+                else {"fixed": "False", "min": str(rn.min), "max": str(rn.max)})
+        return _member("robots_num", boost_json(tree, 12))
+
+    # -- the printed predicates, per template --------------------------------------------------
+    def _sorts(self, value: str) -> tuple[str, ...]:
+        known = self._sort_of.get(value)
+        if known is None:
+            known = self._sort_of[value] = tuple(s for s, members in self.sorts.items() if value in members)
+        return known
+
+    def _predicates_text(self, dec: Decomposition, constants: frozenset[str]) -> str:
+        values: list[str] = []
+        slot: dict[str, int] = {}
+        symbolic: dict[str, Value] = {}
+        shape: list[Hashable] = []
+
+        def placeholder(v: str) -> str:
+            if v in constants:
+                shape.append(("constant", v))
+                return v
+            k = slot.get(v)
+            if k is None:
+                k = slot[v] = len(values)
+                values.append(v)
+                shape.append(self._sorts(v))
+            shape.append(k)
+            return f"{_SLOT_MARK}{k}{_SLOT_MARK}"
+
+        for param, value in dec.instance.binding.items():
+            shape.append(param)
+            if isinstance(value, tuple):
+                shape.append(len(value))
+                symbolic[param] = tuple(placeholder(v) for v in value)
+            else:
+                symbolic[param] = placeholder(value)
+        key = (dec.instance.name, id(dec.path), tuple(shape))
+        escaped = [_escape(v)[1:-1] for v in values]
+        if key in self._predicates:
+            template = self._predicates[key]
+            return template.fill(escaped) if template is not None else predicate_members(self.printer.printed(dec))
+        direct = predicate_members(self.printer.printed(dec))
+        self._predicates[key] = self._template(dec, symbolic, values, escaped, direct)
+        return direct
+
+    def _template(self, dec: Decomposition, symbolic: dict[str, Value], values: list[str], escaped: list[str],
+                  direct: str) -> _Template | None:
+        """The template of ``dec``'s key, if it gives ``direct`` back for ``dec`` itself."""
+        real = {f"{_SLOT_MARK}{k}{_SLOT_MARK}": v for k, v in enumerate(values)}
+        try:
+            printed = self.printer.printed(dec, ground_path(dec.path, symbolic), real)
+        except Exception:  # noqa: BLE001 - a placeholder in an error: the direct path reports it
+            return None
+        template = _Template(predicate_members(printed))
+        return template if template.fill(escaped) == direct else None
+
+    # -- an entry -----------------------------------------------------------------------------
+    def entry(self, dec: Decomposition, group: bool, divisible: bool) -> str:
+        """The task entry of ``dec`` at indent 8, as ``boost_json`` of ``OutputBuilder.task_entry``."""
+        inst = dec.instance
+        task = self.domain.task_by_name[inst.name]
+        values: dict[str, str] = {p.name: "" for p in task.parameters}
+        for pv in inst.parameters:
+            if pv.hddl_param in values:
+                values[pv.hddl_param] = "[" + ",".join(pv.value) + "]" if isinstance(pv.value, tuple) else pv.value
+        loc = inst.location
+        decomposition, constants = self._path(dec.path)
+        members = (
+            _member("id", _escape(dec.id)),
+            self._head(inst.name),
+            _member("arguments_values", boost_json(values, 12)),
+            _member("locations", boost_json(list(loc) if isinstance(loc, tuple) else (loc or ""), 12)),
+            self._cached(("robots", inst.robot_number), lambda: self._robots(inst.robot_number)),
+            self._predicates_text(dec, constants),
+            self._cached(("events", inst.triggering_events), lambda: _member(
+                "triggering_events", boost_json(list(inst.triggering_events), 12))),
+            decomposition,
+            self._cached(("flags", group, divisible), lambda: _member("group", f'"{group}"') + ",\n"
+                         + _member("divisible", f'"{divisible}"')),
+        )
+        return "{\n" + ",\n".join(members) + "\n        }"
