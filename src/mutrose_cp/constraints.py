@@ -142,7 +142,9 @@ def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint], decs: 
 
 
 def _execution_constraints(tg: TaskGraph, decs: _Decompositions) -> list[Constraint]:
-    """§6.3: one EC per decomposition pair of every EC-linked task pair."""
+    """§6.3: one EC per decomposition pair of every EC-linked task pair.  The robot numbers of
+    each linked pair are checked here, once per task pair (§6.5): every decomposition pair of
+    it would fail alike, and the first failing pair is the first failing constraint."""
     out: list[Constraint] = []
     done: set[tuple[int, int]] = set()
     for s in (v.index for v in tg.tasks()):
@@ -150,6 +152,8 @@ def _execution_constraints(tg: TaskGraph, decs: _Decompositions) -> list[Constra
             if (t, s) in done:
                 continue
             done.add((s, t))
+            if decs[s] and decs[t]:
+                _check_robot_numbers(tg, decs[s][0], decs[t][0])
             out += [Constraint(EC, ds, dt, group, divisible) for ds in decs[s] for dt in decs[t]]
     return out
 
@@ -182,26 +186,22 @@ def _drop_implied(constraints: list[Constraint]) -> list[Constraint]:
     return kept
 
 
-def _check_robot_numbers(tg: TaskGraph, constraints: list[Constraint]) -> None:
-    """§6.5: execution-constrained decompositions need compatible robot numbers."""
-    instance = {d.index: d.decomposition.instance for d in tg.decompositions()}
-    for c in constraints:
-        if c.kind != EC:
-            continue
-        a, b = instance[c.first], instance[c.second]
-        ra, rb = a.robot_number, b.robot_number
-        if ra.fixed and rb.fixed:
-            ok = ra.min == rb.min
-        else:
-            ok = ra.min <= rb.max and rb.min <= ra.max
-        if not ok:
-            raise MissionError(
-                f"Wrong robot number for execution constrained tasks [{tg.vertices[c.first].content}] and "
-                f"[{tg.vertices[c.second].content}]: they share robots (a Group=False or Divisible=False goal "
-                f"above them), so their RobotNumber values must overlap; set RobotNumber on {a.gm_task} or "
-                f"{b.gm_task} to agree",
-                f"goal model: tasks {a.gm_task} and {b.gm_task}",
-            )
+def _check_robot_numbers(tg: TaskGraph, s: int, t: int) -> None:
+    """§6.5: execution-constrained decompositions ``s`` and ``t`` need compatible robot numbers."""
+    a, b = tg.decomposition(s).instance, tg.decomposition(t).instance
+    ra, rb = a.robot_number, b.robot_number
+    if ra.fixed and rb.fixed:
+        ok = ra.min == rb.min
+    else:
+        ok = ra.min <= rb.max and rb.min <= ra.max
+    if not ok:
+        raise MissionError(
+            f"Wrong robot number for execution constrained tasks [{tg.vertices[s].content}] and "
+            f"[{tg.vertices[t].content}]: they share robots (a Group=False or Divisible=False goal "
+            f"above them), so their RobotNumber values must overlap; set RobotNumber on {a.gm_task} or "
+            f"{b.gm_task} to agree",
+            f"goal model: tasks {a.gm_task} and {b.gm_task}",
+        )
 
 
 def generate_constraints(tg: TaskGraph) -> list[Constraint]:
@@ -214,7 +214,4 @@ def generate_constraints(tg: TaskGraph) -> list[Constraint]:
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
         has_cd = tg.has_edges_of_kind(EdgeKind.CD)
         out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd), decs)
-    out += _execution_constraints(tg, decs)
-    out = _drop_implied(out)
-    _check_robot_numbers(tg, out)
-    return out
+    return _drop_implied(out) + _execution_constraints(tg, decs)

@@ -293,10 +293,16 @@ class TaskGraphBuilder(_Adjacency):
     def add_ec_to_all(self, tasks: Sequence[int], v: int, group: bool, divisible: bool) -> None:
         """Execution constraints between task ``v`` and each of ``tasks`` it is not yet linked to,
         in that order (one call for what is the bulk of a large mission's edges)."""
-        pairs = self._edges.ec_pairs
-        for t in tasks:
-            if _pair(t, v) not in pairs and (t, v) not in self._edges.kind:
-                self.add_ec(t, v, group, divisible)
+        edges = self._edges
+        pairs, kinds, ec = edges.ec_pairs, edges.kind, edges.ec
+        partner_v = self._partner(v, group, divisible)
+        partners_of_v = ec.setdefault(v, [])
+        for t in tasks:  # add_ec(t, v, ...) for each, inlined: a million calls on large missions
+            if t << 32 | v not in pairs and (t, v) not in kinds:
+                ec.setdefault(t, []).append(partner_v)
+                partners_of_v.append(self._partner(t, group, divisible))
+                pairs.add(t << 32 | v)
+                pairs.add(v << 32 | t)
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
