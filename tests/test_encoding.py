@@ -5,6 +5,7 @@ preconditions checked against execution-constrained partners.  Each test pins th
 valid mission decompositions and checks that the exploratory algorithm agrees."""
 from __future__ import annotations
 
+import dataclasses
 import tempfile
 
 import pytest
@@ -75,6 +76,19 @@ def test_parallel_tasks_may_not_set_a_fact_both_ways(setters):
     b = _task("TaskB", "act1", "act1", "act1", "act1", "act2")
     tree = GoalNode((TaskNode("TaskA"), TaskNode("TaskB")), annotation=("flat", "#"))
     assert _solve(_spec(tree, a, b)) == {_md(f"AT1_1|{k}", "AT2_1|5") for k in range(1, setters + 1)}
+
+
+def test_a_task_sees_the_writers_of_its_branch_not_those_of_a_parallel_one():
+    """AT1 # (AT2 ; AT3): TaskB may make the room clean, TaskA may make it not clean (or do
+    nothing), TaskD needs it clean.  AT3 sees AT2's effects but not AT1's, although AT1 writes
+    the fact first in Task Graph order: only AT2's cleaning can enable AT3, and AT1 must then
+    keep out of the way (a parallel conflict otherwise)."""
+    needs_clean = Action("act7", (Lit("clean", "?rm"),), ())
+    tree = GoalNode((TaskNode("TaskA"), GoalNode((TaskNode("TaskB"), TaskNode("TaskD")), annotation=("flat", ";"))),
+                    annotation=("flat", "#"))
+    spec = dataclasses.replace(_spec(tree, _task("TaskA", "act1", "act3"), _task("TaskB", "act0", "act3"),
+                                     _task("TaskD", "act7")), actions=(*ACTIONS, needs_clean))
+    assert _solve(spec) == {_md("AT1_1|2", "AT2_1|1", "AT3_1|1")}
 
 
 def test_sequence_below_or_alternative_is_not_a_parallel_conflict():

@@ -5,6 +5,8 @@ Both decomposers call these functions, so a rule broken here shows up in both; t
 tests (differential, oracle, ordering) check the decomposers' use of them."""
 from __future__ import annotations
 
+import pytest
+
 from mutrose_cp.constraints import Constraint, EC, SEQ
 from mutrose_cp.expansion import TaskInstance
 from mutrose_cp.htn import DecompositionPath, GroundPredicates, TreeNode
@@ -150,6 +152,13 @@ def test_a_task_sees_what_every_enclosing_sequence_puts_before_it():
     assert scopes.subtree(par) == [a2, a3, *a4]
     # an achieve condition at the inner sequence sees its subtree and what precedes it
     assert scopes.seen_by_achieve(inner) == {a1, a3, *a4}
+    # the same as runs of vertex indices, which select the writers by bisection
+    decompositions = [d.index for d in tg.decompositions()]
+    for t in (task[a1], task[a2], task[a4[0]]):
+        seen = scopes.seen_runs_by_task(t)
+        assert set(seen.select(decompositions, decompositions)) == scopes.seen_by_task(t)
+        assert {d for d in decompositions if d in seen} == scopes.seen_by_task(t)
+    assert set(scopes.seen_runs_by_achieve(inner).select(decompositions, decompositions)) == {a1, a3, *a4}
 
 
 def test_a_task_sees_the_decompositions_that_enable_its_context():
@@ -161,6 +170,33 @@ def test_a_task_sees_the_decompositions_that_enable_its_context():
     tg = g.freeze()
     assert context_enablers(tg) == {tg_task: {enabler}}
     assert EffectScopes(tg).seen_by_task(tg_task) == {enabler}  # parallel, yet seen through the CD edge
+    seen = EffectScopes(tg).seen_runs_by_task(tg_task)
+    assert list(seen.select([enabler, d2], [enabler, d2])) == [enabler]
+
+
+def test_seen_runs_agree_with_seen_sets_on_every_reference_task_graph(reference):
+    """The runs rely on the depth-first numbering of the Task Graph: on every reference mission,
+    what they select is what the sets hold, for every task and every scope vertex."""
+    from mutrose_cp.mission import Mission, find_mission_files
+
+    graphs = 0
+    for folder in sorted(p for p in reference.glob("*/*") if (p / "configuration").is_dir()):
+        for config in sorted((folder / "configuration").glob("*.json")):
+            try:
+                tg = Mission.load(*find_mission_files(folder, config.name)).task_graph
+            except Exception:  # noqa: BLE001 - missions the pipeline refuses have no Task Graph
+                continue
+            graphs += 1
+            scopes = EffectScopes(tg)
+            decompositions = [d.index for d in tg.decompositions()]
+            for v in range(len(tg.vertices)):
+                if isinstance(tg.vertices[v], TaskVertex):
+                    got = scopes.seen_runs_by_task(v).select(decompositions, decompositions)
+                    assert list(got) == sorted(scopes.seen_by_task(v)), (folder, v)
+                elif not isinstance(tg.vertices[v], DecompositionVertex):
+                    got = scopes.seen_runs_by_achieve(v).select(decompositions, decompositions)
+                    assert list(got) == sorted(scopes.seen_by_achieve(v)), (folder, v)
+    assert graphs > 20
 
 
 # --- preconditions (§7.4) -----------------------------------------------------------------------------
@@ -276,3 +312,20 @@ def test_robot_preconditions_are_written_by_partners_effects_renamed(tmp_path):
     assert precondition == Literal("holding", ("?s",), True)
     assert writers == [(pick, True)]  # pick's (holding ?r) renamed onto drop's ?s
     assert robot_precondition_writers(domain, tg, pick, index, position) == []  # no partner before it
+
+
+def test_seen_selects_writers_by_runs_and_single_vertices():
+    """Runs apart in the graph whose writers are adjacent give one view of the writers (no copy);
+    a single vertex inside a run is not selected twice; the view reads like a list."""
+    from mutrose_cp.solve.semantics import Seen
+
+    positions = [1, 2, 4, 7, 9, 12]
+    items = [f"w{p}" for p in positions]
+    view = Seen(((0, 3), (4, 8))).select(items, positions)
+    assert list(view) == ["w1", "w2", "w4", "w7"] and len(view) == 4
+    assert view[-1] is items[3] and view[0] == "w1" and view[1:3] == ["w2", "w4"]
+    with pytest.raises(IndexError):
+        view[4]
+    assert list(Seen(((0, 3),), frozenset({2, 9, 10})).select(items, positions)) == ["w1", "w2", "w9"]
+    assert list(Seen(((8, 10),), frozenset({1})).select(items, positions)) == ["w1", "w9"]
+    assert list(Seen(()).select(items, positions)) == []

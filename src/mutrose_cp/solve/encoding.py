@@ -14,7 +14,7 @@ auxiliary variable is defined by an equivalence, so each solution is a distinct 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable, Generic, Iterable, TypeVar
+from typing import Any, Callable, Generic, Iterable, Sequence, TypeVar
 
 from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
@@ -26,6 +26,7 @@ from .semantics import (
     ConstraintIndex,
     EffectScopes,
     Effects,
+    Seen,
     achieve_tests,
     application_order,
     checks_parallel_conflicts,
@@ -79,6 +80,8 @@ class Encoder:
         # the value of each atom after a prefix of its writers, as a tree of prefixes
         self._bool_chains: dict[AtomKey, _Chain[tuple[Lit, Lit]]] = {}
         self._num_chains: dict[AtomKey, _Chain[tuple[Lit, int | None]]] = {}
+        self._bool_prefixes: dict[AtomKey, list[_Chain[tuple[Lit, Lit]]]] = {}  # after the first k writers
+        self._writer_positions: dict[AtomKey, list[int]] = {}
         order = application_order(self.effects)
         self.bool_writers: dict[AtomKey, list[tuple[int, bool]]] = {}
         self.num_writers: dict[AtomKey, list[tuple[int, str, float]]] = {}
@@ -155,7 +158,7 @@ class Encoder:
                 self._choices(c, active)
 
     # --- world values ------------------------------------------------------------------------------
-    def _bool_value(self, atom: AtomKey, writers: list[tuple[int, bool]]) -> tuple[Lit, Lit]:
+    def _bool_value(self, atom: AtomKey, writers: Sequence[tuple[int, bool]]) -> tuple[Lit, Lit]:
         """(known, true) literals of ``atom`` after the chosen ``writers`` (in Task Graph order) have been
         applied to the initial state.
 
@@ -163,19 +166,32 @@ class Encoder:
         chosen, else the value before.  Tests that see a common prefix of writers (the tasks of a
         sequence) share its steps, so the whole state of the atom between two tasks is one pair of
         literals: components of tasks coupled through a few facts decompose block by block
-        (:mod:`.layered`)."""
-        node = self._chain_root(atom, self._bool_chains, self._bool_start)
+        (:mod:`.layered`).  The tasks of a long sequence see ever longer prefixes of the atom's
+        writers: those are looked up by length, not walked again, which keeps the encoding linear."""
+        root = self._chain_root(atom, self._bool_chains, self._bool_start)
+        everyone = self.bool_writers.get(atom, ())
+        k = len(writers)
+        if k and k <= len(everyone) and writers[-1] is everyone[k - 1]:  # a subsequence: this is a prefix
+            prefix = self._bool_prefixes.setdefault(atom, [root])
+            while len(prefix) <= k:
+                prefix.append(self._bool_step(atom, prefix[-1], *everyone[len(prefix) - 1]))
+            return prefix[k].value
+        node = root
         for w, pol in writers:
-            step = node.next.get((w, pol))
-            if step is None:
-                known_before, true_before = node.value
-                xw = self.x[w]
-                name = f"{_atom_name(atom)} after {self.tg.vertices[w].content}"
-                value = (self.m.or_of([xw, known_before], f"known {name}"),
-                         self.m.or_of([xw, true_before], name) if pol else self.m.and_of([neg(xw), true_before], name))
-                step = node.next[(w, pol)] = _Chain(value)
-            node = step
+            node = self._bool_step(atom, node, w, pol)
         return node.value
+
+    def _bool_step(self, atom: AtomKey, node: "_Chain[tuple[Lit, Lit]]", w: int, pol: bool) -> "_Chain[tuple[Lit, Lit]]":
+        """The chain node after writer ``w`` (setting ``atom`` to ``pol`` if chosen) follows ``node``."""
+        step = node.next.get((w, pol))
+        if step is None:
+            known_before, true_before = node.value
+            xw = self.x[w]
+            name = f"{_atom_name(atom)} after {self.tg.vertices[w].content}"
+            value = (self.m.or_of([xw, known_before], f"known {name}"),
+                     self.m.or_of([xw, true_before], name) if pol else self.m.and_of([neg(xw), true_before], name))
+            step = node.next[(w, pol)] = _Chain(value)
+        return step
 
     def _bool_start(self, atom: AtomKey) -> tuple[Lit, Lit]:
         init = self.facts.get(atom)
@@ -188,7 +204,7 @@ class Encoder:
             root = chains[atom] = _Chain(start(atom))
         return root
 
-    def _bool_holds(self, atom: AtomKey, positive: bool, writers: list[tuple[int, bool]], name: str) -> Lit:
+    def _bool_holds(self, atom: AtomKey, positive: bool, writers: Sequence[tuple[int, bool]], name: str) -> Lit:
         """Literal: the open-world test ``atom == positive`` holds after ``writers``."""
         if not writers:
             init = self.facts.get(atom)
@@ -196,7 +212,7 @@ class Encoder:
         known, true = self._bool_value(atom, writers)
         return self.m.or_of([neg(known), true if positive else neg(true)], name)
 
-    def _num_holds(self, atom: AtomKey, op: str, bound: float, writers: list[tuple[int, str, float]], name: str) -> Lit:
+    def _num_holds(self, atom: AtomKey, op: str, bound: float, writers: Sequence[tuple[int, str, float]], name: str) -> Lit:
         """Literal: the open-world comparison ``atom op bound`` holds after ``writers``."""
         init = self.values.get(atom)
         if not writers:
@@ -209,7 +225,7 @@ class Encoder:
         self.m.records.append(Compare(sat, value, op, round(bound * SCALE)))
         return self.m.or_of([neg(known), sat], name)
 
-    def _num_value(self, atom: AtomKey, writers: list[tuple[int, str, float]]) -> tuple[Lit, int | None]:
+    def _num_value(self, atom: AtomKey, writers: Sequence[tuple[int, str, float]]) -> tuple[Lit, int | None]:
         """(known literal, integer variable) of ``atom`` after the chosen ``writers``: a chain of
         :class:`ValueAfter` steps shared by the tests that see a common prefix of writers (as
         :meth:`_bool_value`); the variable is None before the first writer."""
@@ -231,7 +247,7 @@ class Encoder:
             node = step
         return node.value
 
-    def _state_test(self, test: Test, decs: set[int], name: str) -> Lit:
+    def _state_test(self, test: Test, decs: Seen, name: str) -> Lit:
         """Literal for an achieve/context test evaluated after the chosen ``decs``."""
         if isinstance(test, FactTest):
             atom = (test.predicate, test.args)
@@ -242,17 +258,26 @@ class Encoder:
         parts = [self._state_test(p, decs, name) for p in test.parts]
         return self.m.and_of(parts, name) if isinstance(test, AllOf) else self.m.or_of(parts, name)
 
-    def _bool_writers(self, atom: AtomKey, decs: set[int]) -> list[tuple[int, bool]]:
-        return [w for w in self.bool_writers.get(atom, ()) if w[0] in decs]
+    def _bool_writers(self, atom: AtomKey, seen: Seen) -> Sequence[tuple[int, bool]]:
+        everyone = self.bool_writers.get(atom, [])
+        return seen.select(everyone, self._writer_vertices(atom, everyone)) if everyone else everyone
 
-    def _num_writers(self, atom: AtomKey, decs: set[int]) -> list[tuple[int, str, float]]:
-        return [w for w in self.num_writers.get(atom, ()) if w[0] in decs]
+    def _num_writers(self, atom: AtomKey, seen: Seen) -> Sequence[tuple[int, str, float]]:
+        everyone = self.num_writers.get(atom, [])
+        return seen.select(everyone, [w[0] for w in everyone]) if everyone else everyone
+
+    def _writer_vertices(self, atom: AtomKey, everyone: list[tuple[int, bool]]) -> list[int]:
+        """The decomposition vertices of ``atom``'s writers, in order (listed once per atom)."""
+        known = self._writer_positions.get(atom)
+        if known is None:
+            known = self._writer_positions[atom] = [w[0] for w in everyone]
+        return known
 
     # --- rules -------------------------------------------------------------------------------------
     def _task_rules(self, t: int) -> None:
         tg = self.tg
-        seen = self.scopes.seen_by_task(t)
-        writers_seen: dict[AtomKey, list[tuple[int, bool]]] = {}  # the decompositions share them
+        seen = self.scopes.seen_runs_by_task(t)
+        writers_seen: dict[AtomKey, Sequence[tuple[int, bool]]] = {}  # the decompositions share them
         for i, context in enumerate(tg.task(t).contexts):
             ok = self._state_test(context, seen, f"context({tg.vertices[t].content})")
             self.m.clause([neg(self.active[t]), ok], self._label(
@@ -313,7 +338,7 @@ class Encoder:
         """An achieve condition checked at ``v`` must hold when ``v`` is active, after the
         effects of ``v``'s subtree.  A conjunction is posted part by part (one per forAll
         element), so independent instances stay in independent components."""
-        decs = self.scopes.seen_by_achieve(v)
+        decs = self.scopes.seen_runs_by_achieve(v)
         parts = list(_conjuncts(test))
         for i, part in enumerate(parts):
             holds = self._state_test(part, decs, f"achieve({goal}@{v})")

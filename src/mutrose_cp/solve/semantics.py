@@ -18,8 +18,10 @@ CP-SAT encoder posts the same rules as clauses over choice literals.
 """
 from __future__ import annotations
 
+import itertools
+from bisect import bisect_left
 from dataclasses import dataclass
-from typing import Iterable, Mapping
+from typing import Iterable, Iterator, Mapping, Sequence, TypeVar, overload
 
 from ..conditions import AllOf, Test, compare, holds, translate
 from ..constraints import EC, SEQ, Constraint
@@ -295,6 +297,72 @@ def application_order(decompositions: Iterable[int]) -> list[int]:
     return sorted(decompositions)
 
 
+T = TypeVar("T")
+
+
+class _Span(Sequence[T]):
+    """``items[start:stop]`` without copying them: the tasks of a long sequence each see a
+    longer prefix of a fact's writers, and copying every prefix would be quadratic."""
+
+    __slots__ = ("items", "start", "stop")
+
+    def __init__(self, items: Sequence[T], start: int, stop: int) -> None:
+        self.items, self.start, self.stop = items, start, stop
+
+    def __len__(self) -> int:
+        return self.stop - self.start
+
+    @overload
+    def __getitem__(self, i: int) -> T: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> Sequence[T]: ...
+
+    def __getitem__(self, i: int | slice) -> T | Sequence[T]:
+        if isinstance(i, slice):
+            return self.items[self.start:self.stop][i]
+        n = self.stop - self.start
+        if not -n <= i < n:
+            raise IndexError(i)
+        return self.items[self.start + (i if i >= 0 else i + n)]
+
+    def __iter__(self) -> Iterator[T]:
+        return itertools.islice(self.items, self.start, self.stop)
+
+
+@dataclass(frozen=True)
+class Seen:
+    """Decomposition vertices whose effects a vertex sees, as runs of vertex indices plus single
+    vertices.  The Task Graph is numbered depth first, so what the enclosing sequences put before
+    a vertex is one run per sequence: the tasks of a sequence of thousands see ever longer runs,
+    which are looked up by bisection instead of being copied into a set per task."""
+
+    runs: tuple[tuple[int, int], ...]  # [first, end) vertex indices, in order, disjoint
+    single: frozenset[int] = frozenset()  # context-dependency enablers
+
+    def __contains__(self, d: object) -> bool:
+        return d in self.single or any(lo <= d < hi for lo, hi in self.runs)  # type: ignore[operator]
+
+    def select(self, items: Sequence[T], positions: Sequence[int]) -> Sequence[T]:
+        """The ``items`` whose vertex (``positions``, increasing) is seen, in order: a slice per
+        run and per single vertex, found by bisection."""
+        spans = [(bisect_left(positions, lo), bisect_left(positions, hi)) for lo, hi in self.runs]
+        for d in self.single:
+            i = bisect_left(positions, d)
+            if i < len(positions) and positions[i] == d and not any(lo <= d < hi for lo, hi in self.runs):
+                spans.append((i, i + 1))
+        spans = sorted((a, b) for a, b in spans if a < b)
+        joined: list[tuple[int, int]] = []
+        for a, b in spans:  # runs apart in the graph may hold adjacent writers: one span then
+            if joined and joined[-1][1] == a:
+                joined[-1] = (joined[-1][0], b)
+            else:
+                joined.append((a, b))
+        if len(joined) == 1:
+            return _Span(items, *joined[0])
+        return list(itertools.chain.from_iterable(items[a:b] for a, b in joined))
+
+
 class EffectScopes:
     """Which decompositions' effects a vertex of the Task Graph sees (§7.3).
 
@@ -332,6 +400,30 @@ class EffectScopes:
                     out.update(self.subtree(c))
             child, p = p, tg.vertices[p].parent
         return out
+
+    def preceding_runs(self, v: int) -> list[tuple[int, int]]:
+        """:meth:`preceding` as runs of vertex indices: the earlier children of each enclosing
+        sequence, from its first child up to the branch that holds ``v`` (depth-first numbering)."""
+        tg = self.tg
+        runs: list[tuple[int, int]] = []
+        child, p = v, tg.vertices[v].parent
+        while p >= 0:
+            if tg.vertices[p].content == ";":
+                first = tg.children(p)[0]
+                if first != child:
+                    runs.append((first, child))
+            child, p = p, tg.vertices[p].parent
+        return sorted(runs)
+
+    def seen_runs_by_task(self, t: int) -> Seen:
+        """:meth:`seen_by_task` as a :class:`Seen`."""
+        return Seen(tuple(self.preceding_runs(t)), frozenset(self.enablers.get(t, ())))
+
+    def seen_runs_by_achieve(self, v: int) -> Seen:
+        """:meth:`seen_by_achieve` as a :class:`Seen`: the runs before ``v`` and its own subtree."""
+        below = self.subtree(v)
+        own = [(v, below[-1] + 1)] if below else []
+        return Seen(tuple(self.preceding_runs(v) + own))
 
     def seen_by_task(self, t: int) -> set[int]:
         """The decompositions whose effects make the state where task ``t`` starts."""
