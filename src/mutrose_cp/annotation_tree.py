@@ -25,7 +25,7 @@ class RatKind(StrEnum):
 OPERATOR, MEANSEND, GOAL, TASK = RatKind.OPERATOR, RatKind.MEANSEND, RatKind.GOAL, RatKind.TASK
 
 
-@dataclass
+@dataclass(slots=True)
 class RatNode:
     kind: RatKind
     content: str  # ";", "#", "FALLBACK", a goal id, or a task instance id

@@ -37,7 +37,7 @@ Value = str | tuple[str, ...]
 MAX_GOAL_DEPTH = 10_000  # goal levels; deeper models are refused with the goal named
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ParameterValue:
     """One entry of an instance's variable mapping: an HDDL parameter and its value."""
 
@@ -47,7 +47,7 @@ class ParameterValue:
     gm_var: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class TaskInstance:
     """An abstract-task instance created from a goal-model task in one forAll context."""
 

@@ -501,7 +501,7 @@ def all_task_paths(domain: Domain) -> dict[str, list[DecompositionPath]]:
 Value = str | tuple[str, ...]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class GroundPredicates:
     """Preconditions and net effects of a decomposition of one task instance."""
 

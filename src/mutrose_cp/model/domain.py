@@ -19,7 +19,7 @@ class Parameter:
     type: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Literal:
     """A boolean atom ``(pred a1 a2)`` or its negation; arguments are variables or constants."""
 
@@ -28,7 +28,7 @@ class Literal:
     positive: bool = True
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Comparison:
     """A numeric precondition ``(= (f a..) N)`` or ``(> (f a..) N)``.
 

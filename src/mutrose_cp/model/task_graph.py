@@ -8,9 +8,11 @@ constraints (EC).  A vertex's ``index`` is its position, which fixes the output 
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
+from operator import attrgetter
 from enum import StrEnum
-from typing import TYPE_CHECKING, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence
 
 if TYPE_CHECKING:  # the types of the stages that produce a vertex's content
     from ..conditions import Test
@@ -33,7 +35,7 @@ class EdgeKind(StrEnum):
     EC = "EC"  # execution constraint: tasks that share robots (Group/Divisible)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Decomposition:
     """One HTN decomposition path of one task instance: ``AT1_1|2``."""
 
@@ -44,7 +46,11 @@ class Decomposition:
     predicates: GroundPredicates
 
 
-@dataclass(frozen=True, kw_only=True)
+# per vertex class: its field names and a getter of their values (see _Vertex.moved)
+_FIELDS: dict[type, tuple[tuple[str, ...], Callable[[Any], tuple[Any, ...]]]] = {}
+
+
+@dataclass(frozen=True, kw_only=True, slots=True)
 class _Vertex:
     index: int
     parent: int  # -1 at the root
@@ -53,15 +59,23 @@ class _Vertex:
     divisible: bool = True
 
     def moved(self, index: int, parent: int) -> Self:
-        """The same vertex at another position: trimming renumbers the graph.  (A direct copy:
-        ``dataclasses.replace`` re-runs ``__init__``, which cost a tenth of the build on large
+        """The same vertex at another position: trimming renumbers the graph.  (A direct copy of
+        the slots: ``dataclasses.replace`` re-runs ``__init__``, which costs more on large
         missions.)"""
-        new = object.__new__(type(self))
-        new.__dict__.update(self.__dict__, index=index, parent=parent)
+        cls = type(self)
+        fields = _FIELDS.get(cls)
+        if fields is None:
+            names = tuple(f.name for f in dataclasses.fields(cls))
+            fields = _FIELDS[cls] = (names, attrgetter(*names))
+        new = object.__new__(cls)
+        for name, value in zip(fields[0], fields[1](self)):
+            object.__setattr__(new, name, value)
+        object.__setattr__(new, "index", index)
+        object.__setattr__(new, "parent", parent)
         return new
 
 
-@dataclass(frozen=True, kw_only=True)
+@dataclass(frozen=True, kw_only=True, slots=True)
 class ScopeVertex(_Vertex):
     """An operator or a means-end goal: a vertex that scopes the subtree of a goal."""
 
@@ -73,17 +87,17 @@ class ScopeVertex(_Vertex):
     contexts: tuple[Test, ...] = ()
 
 
-@dataclass(frozen=True, kw_only=True)
+@dataclass(frozen=True, kw_only=True, slots=True)
 class OperatorVertex(ScopeVertex):
     kind: ClassVar[VertexKind] = VertexKind.OPERATOR
 
 
-@dataclass(frozen=True, kw_only=True)
+@dataclass(frozen=True, kw_only=True, slots=True)
 class GoalVertex(ScopeVertex):
     kind: ClassVar[VertexKind] = VertexKind.GOAL
 
 
-@dataclass(frozen=True, kw_only=True)
+@dataclass(frozen=True, kw_only=True, slots=True)
 class TaskVertex(_Vertex):
     kind: ClassVar[VertexKind] = VertexKind.TASK
     instance: TaskInstance
@@ -91,7 +105,7 @@ class TaskVertex(_Vertex):
     contexts: tuple[Test, ...] = ()
 
 
-@dataclass(frozen=True, kw_only=True)
+@dataclass(frozen=True, kw_only=True, slots=True)
 class DecompositionVertex(_Vertex):
     kind: ClassVar[VertexKind] = VertexKind.DECOMPOSITION
     decomposition: Decomposition
