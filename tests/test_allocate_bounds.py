@@ -30,13 +30,18 @@ FLEET = DELIVERY / "fleet.json"
 
 
 def _variants(tmp_path: Path) -> list[tuple[Path, Path]]:
-    """The delivery example with its fleet, without its all-rounder, and a generated grid of
-    five deliveries for three robots (one of each kind)."""
+    """The delivery example with its fleet, without its all-rounder, with a travel table of
+    long roads from the dock, and a generated grid of five deliveries for three robots (one of
+    each kind)."""
     data = json.loads(FLEET.read_text())
     data["robots"] = [r for r in data["robots"] if r["name"] != "allrounder"]
     fewer = tmp_path / "fewer.json"
     fewer.write_text(json.dumps(data))
-    return [(DELIVERY, FLEET), (DELIVERY, fewer), generate(5, 3, tmp_path)]
+    data = json.loads(FLEET.read_text())
+    data["travel"]["times"] = {"Dock": {"CentralPharmacy": 70, "SupplyRoom": 90}, "WardB": {"Laboratory": 5}}
+    table = tmp_path / "table.json"
+    table.write_text(json.dumps(data))
+    return [(DELIVERY, FLEET), (DELIVERY, fewer), (DELIVERY, table), generate(5, 3, tmp_path)]
 
 
 @pytest.mark.parametrize("objective", ["makespan", "weighted:2,1"])
@@ -60,6 +65,22 @@ def test_the_load_bound_counts_the_pool_of_able_robots():
     assert chosen is not None and bound.decompositions
     average = sum(problem.jobs[d].duration for d in chosen) / len(problem.fleet.robots)
     assert bound.status == "OPTIMAL" and bound.value is not None and bound.value > average
+
+
+def test_the_load_bound_counts_the_trip_between_tasks_of_the_same_robot(monkeypatch):
+    """In the example the robot that fetches an item also hands it over (an execution
+    constraint), so its trip from the supply room to the ward lies on the chain: the bound rises
+    above the one of the chains without trips."""
+    from mutrose_cp.allocate import load
+
+    mission = Mission.load(*find_mission_files(DELIVERY))
+    problem = build_problem(mission.decomposition_model(), Fleet.read(FLEET))
+    with_trips = load_bound(problem, Objective(), 10.0)
+    monkeypatch.setattr(load, "carry_time", lambda *_: 0)
+    without = load_bound(problem, Objective(), 10.0)
+    assert with_trips.status == without.status == "OPTIMAL"
+    assert with_trips.value is not None and without.value is not None
+    assert with_trips.value > without.value
 
 
 def test_the_warm_start_passes_the_checker(tmp_path):
