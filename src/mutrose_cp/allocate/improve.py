@@ -6,7 +6,7 @@ descent fixes both, before the schedule is handed to CP-SAT as its hint:
 
 * a *unit* is a chosen job and the jobs that must share its robot (execution constraints), done
   by one robot; units done by a team stay where they are;
-* a move takes a unit off the robot that finishes last and inserts each of its jobs, in order,
+* a move takes a unit off a robot (the one that finishes last first) and inserts each of its jobs, in order,
   where it adds the least travel to another able robot's sequence (*relocate*), or to its own
   (*reorder*);
 * every move is evaluated exactly (:func:`evaluate`: each job as early as its predecessors and
@@ -196,7 +196,7 @@ def _units(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str
 
 def _better_move(problem: AllocationProblem, evaluator: _Evaluator, sequences: Sequences, units: list[list[str]],
                  best: Evaluated) -> tuple[Sequences, Evaluated] | None:
-    """The first move off the robot that finishes last that scores better than ``best``."""
+    """The first move that scores better than ``best``, off the robots that finish last first."""
     end = {j: best.start[j] + problem.jobs[j].duration for j in best.start}
     order = sorted((r for r in sequences if sequences[r]), key=lambda r: (-end[sequences[r][-1]], r))
     for robot in order:
