@@ -176,11 +176,11 @@ def report(data: dict) -> None:
              "other work while it ran: times are indicative). " + __doc__.split("\n\n")[1].replace("\n", " "), "",
              TARGETS, "",
              "| deliveries | robots | jobs | status | makespan | CP-SAT bound | LP bound | load bound | gap (CP-SAT) "
-             "| gap (LP) | gap (load) | load s | LP s | model s | search s | total s |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| gap (LP) | gap (load) | load s | warm start s | LP s | model s | search s | total s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in data["rows"]:
         if "error" in r:
-            lines.append(f"| {r['deliveries']} | {r['robots']} | | error: {r['error'][-120:]} |" + " |" * 12)
+            lines.append(f"| {r['deliveries']} | {r['robots']} | | error: {r['error'][-120:]} |" + " |" * 13)
             continue
         sec = r["seconds"]
         bound = "-" if r["cp_bound"] is None else f"{r['cp_bound']:g}"
@@ -189,6 +189,7 @@ def report(data: dict) -> None:
         lines.append(f"| {r['deliveries']} | {r['robots']} | {r['jobs']} | {r['status']}"
                      f"{' (restricted)' if r.get('restricted') else ''} | {r['objective']} | {bound} | {lp} | {load} | "
                      f"{_gap(r['gap'])} | {_gap(r['lp_gap'])} | {_gap(r.get('load_gap'))} | {sec.get('load', 0):.1f} | "
+                     f"{sec.get('warm', 0):.1f} | "
                      f"{sec.get('lp', 0):.1f} | {sec.get('model', 0):.1f} | {sec.get('search', 0):.1f} | "
                      f"{r.get('total_seconds', 0):.1f} |")
     lines += ["", "Objective / CP-SAT bound over time (seconds of search):", "",

@@ -1,6 +1,7 @@
 """The allocation's lower bounds and its warm start, on missions small enough to be solved to
-optimality: each bound is at most the proven optimum, and the warm start's schedule passes the
-independent checker (``allocation_checker``) as it is."""
+optimality: each bound is at most the proven optimum, and the warm start's schedule, list
+scheduling improved by local moves, passes the independent checker (``allocation_checker``) as
+it is."""
 from __future__ import annotations
 
 import json
@@ -13,6 +14,7 @@ import pytest
 from allocation_checker import check_allocation
 from mutrose_cp.allocate import AllocationOptions, Fleet, Objective
 from mutrose_cp.allocate.allocation import Allocation
+from mutrose_cp.allocate.improve import evaluate, improve
 from mutrose_cp.allocate.load import load_bound
 from mutrose_cp.allocate.output import write_decomposition, write_schedule
 from mutrose_cp.allocate.problem import build_problem
@@ -30,13 +32,18 @@ FLEET = DELIVERY / "fleet.json"
 
 
 def _variants(tmp_path: Path) -> list[tuple[Path, Path]]:
-    """The delivery example with its fleet, without its all-rounder, and a generated grid of
-    five deliveries for three robots (one of each kind)."""
+    """The delivery example with its fleet, without its all-rounder, with a travel table of
+    long roads from the dock, and a generated grid of five deliveries for three robots (one of
+    each kind)."""
     data = json.loads(FLEET.read_text())
     data["robots"] = [r for r in data["robots"] if r["name"] != "allrounder"]
     fewer = tmp_path / "fewer.json"
     fewer.write_text(json.dumps(data))
-    return [(DELIVERY, FLEET), (DELIVERY, fewer), generate(5, 3, tmp_path)]
+    data = json.loads(FLEET.read_text())
+    data["travel"]["times"] = {"Dock": {"CentralPharmacy": 70, "SupplyRoom": 90}, "WardB": {"Laboratory": 5}}
+    table = tmp_path / "table.json"
+    table.write_text(json.dumps(data))
+    return [(DELIVERY, FLEET), (DELIVERY, fewer), (DELIVERY, table), generate(5, 3, tmp_path)]
 
 
 @pytest.mark.parametrize("objective", ["makespan", "weighted:2,1"])
@@ -60,6 +67,22 @@ def test_the_load_bound_counts_the_pool_of_able_robots():
     assert chosen is not None and bound.decompositions
     average = sum(problem.jobs[d].duration for d in chosen) / len(problem.fleet.robots)
     assert bound.status == "OPTIMAL" and bound.value is not None and bound.value > average
+
+
+def test_the_load_bound_counts_the_trip_between_tasks_of_the_same_robot(monkeypatch):
+    """In the example the robot that fetches an item also hands it over (an execution
+    constraint), so its trip from the supply room to the ward lies on the chain: the bound rises
+    above the one of the chains without trips."""
+    from mutrose_cp.allocate import load
+
+    mission = Mission.load(*find_mission_files(DELIVERY))
+    problem = build_problem(mission.decomposition_model(), Fleet.read(FLEET))
+    with_trips = load_bound(problem, Objective(), 10.0)
+    monkeypatch.setattr(load, "carry_time", lambda *_: 0)
+    without = load_bound(problem, Objective(), 10.0)
+    assert with_trips.status == without.status == "OPTIMAL"
+    assert with_trips.value is not None and without.value is not None
+    assert with_trips.value > without.value
 
 
 def test_the_warm_start_passes_the_checker(tmp_path):
@@ -108,3 +131,48 @@ def test_an_lp_cut_by_its_time_limit_gives_no_bound(tmp_path, monkeypatch, capsy
     assert doc["objective"]["lp_bound"] is None and doc["objective"]["lp_status"] == "MaxTime"
     assert doc["objective"]["load_bound"] is not None
     assert "LP not solved (MaxTime)" in capsys.readouterr().err
+
+
+def _check_plan(tmp_path: Path, mission: Mission, fleet_path: Path, problem, chosen, teams, start, name: str) -> None:
+    """The schedule of ``teams`` / ``start`` passes the checker, and no job can start earlier."""
+    end = {j: start[j] + problem.jobs[j].duration for j in chosen}
+    schedule = compact(problem, chosen, teams, start, end)
+    assert dict(schedule.start) == dict(start)
+    allocation = Allocation(problem, AllocationOptions(), "FEASIBLE", schedule, None, None)
+    write_schedule(allocation, tmp_path / f"{name}.json")
+    write_decomposition(allocation, tmp_path / f"{name}-mission.json", "JSON")
+    check_allocation(mission, fleet_path, tmp_path / f"{name}.json", tmp_path / f"{name}-mission.json")
+
+
+def test_local_moves_shorten_the_list_schedule(tmp_path):
+    """Twelve deliveries for six robots: moving deliveries off the robot that finishes last
+    ends well before the list schedule, the schedule passes the checker, and the same seed gives
+    the same schedule (the search stops on its own budget, not on the clock)."""
+    mission_dir, fleet_path = generate(12, 6, tmp_path)
+    mission = Mission.load(*find_mission_files(mission_dir))
+    problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
+    chosen = load_bound(problem, Objective(), 10.0).decompositions[-1]
+    plan = greedy_plan(problem, chosen)
+    assert plan is not None
+    listed = max(plan[1][j] + problem.jobs[j].duration for j in chosen)
+    teams, start, value = improve(problem, chosen, *plan, Objective(), 600.0)
+    assert value == max(start[j] + problem.jobs[j].duration for j in chosen) < 0.9 * listed
+    _check_plan(tmp_path, mission, fleet_path, problem, chosen, teams, start, "improved")
+    sequences = {r.name: sorted((j for j in chosen if r.name in teams[j]), key=lambda j: (start[j], j))
+                 for r in problem.fleet.robots}
+    evaluated = evaluate(problem, chosen, sequences)
+    assert evaluated is not None and evaluated.start == start
+    assert improve(problem, chosen, *plan, Objective(), 600.0) == (teams, start, value)
+
+
+def test_orders_against_the_precedences_are_no_schedule(tmp_path):
+    """A robot that hands an item over before fetching it: the evaluator finds the cycle."""
+    mission_dir, fleet_path = generate(2, 3, tmp_path)
+    mission = Mission.load(*find_mission_files(mission_dir))
+    problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
+    first, second = problem.same_robots[0]
+    chosen = [first, second]
+    robot = next(r for r in problem.jobs[first].candidates if r in problem.jobs[second].candidates)
+    assert evaluate(problem, chosen, {robot: [second, first]}) is None
+    forward = evaluate(problem, chosen, {robot: [first, second]})
+    assert forward is not None and forward.start[second] >= forward.start[first] + problem.jobs[first].duration

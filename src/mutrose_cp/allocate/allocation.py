@@ -3,14 +3,17 @@
     decomposition model (solve/embedding.py) + fleet
         --problem.py-->  jobs, candidates, precedences, travel times
         --load.py-->     the load bound, and a decomposition that spreads the work
-        --warmstart.py--> a first schedule (list scheduling), a hint for the search
+        --warmstart.py--> a first schedule (list scheduling, improved by local moves in
+                          improve.py), a hint for the search
         --bounds.py-->   the LP bound (Clarabel)
         --model.py-->    the joint CP-SAT model
         --search.py-->   the best schedule within the time left, and CP-SAT's bound
         --schedule.py--> chosen jobs, teams, compacted times, routes
 
-The time limit is the whole run's: the load relaxation may take a tenth of it and the LP a
-quarter (an LP cut short gives no bound), and the search has what is left, at least a tenth.
+The time limit is the whole run's: the load relaxation may take a tenth of it, the warm start's
+local moves about a seventh (two fifths on a large mission, whose restricted search rarely
+improves a good hint) and the LP a quarter (an LP cut short gives no bound), and the search has
+what is left, at least a tenth.
 """
 from __future__ import annotations
 
@@ -34,6 +37,8 @@ if TYPE_CHECKING:
 
 LOAD_SHARE = 0.1  # of the time limit, at most, for the load relaxation
 LP_SHARE = 0.25  # for the LP
+IMPROVE_SHARE = 0.15  # for the local improvement of the warm start, at most
+LARGE_IMPROVE_SHARE = 0.4  # for it on a mission searched within near robots and places
 SEARCH_SHARE = 0.1  # for the search, at least
 
 
@@ -100,7 +105,12 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
     if options.lp_bound or options.warm_start:
         load = load_bound(problem, options.objective, LOAD_SHARE * budget, options.workers, options.seed)
         seconds["load"] = load.seconds
-    warm = warm_start(problem, load.decompositions if load else ()) if options.warm_start else None
+    warming = time.perf_counter()
+    share = LARGE_IMPROVE_SHARE if restrict(problem).active else IMPROVE_SHARE
+    warm = (warm_start(problem, load.decompositions if load else (), options.objective, share * budget, options.seed,
+                       load.value if load else None) if options.warm_start else None)
+    if warm is not None:
+        seconds["warm"] = time.perf_counter() - warming
     lp = lp_bound(problem, options.objective, LP_SHARE * budget) if options.lp_bound else None
     if lp is not None:
         seconds["lp"] = lp.seconds
@@ -109,7 +119,7 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
     am = build_model(problem, options.objective, restriction)
     if warm is not None:
         add_hint(am, warm)
-    seconds["model"] = time.perf_counter() - clock - seconds.get("load", 0.0) - seconds.get("lp", 0.0)
+    seconds["model"] = time.perf_counter() - clock - sum(seconds.values())
     left = max(SEARCH_SHARE * budget, budget - (time.perf_counter() - clock))
     improve_only = restriction.active and warm is not None  # large-neighbourhood search from the hint
     outcome = search(am, SearchLimits(left, options.workers, options.seed, improve_only), progress)

@@ -11,7 +11,8 @@ choice of decomposition exact and forgets which robot does what and when:
   by one of them, at least at its *cheapest way in* for ``S`` (0 when one of them starts there);
   all of that fits in ``|S| * makespan``;
 * **chains**: a job starts after the earliest arrival of an able robot and after its
-  predecessors end; it ends by the makespan;
+  predecessors end, and, when a predecessor must be done by the same robots (an execution
+  constraint), after their quickest trip from its place; it ends by the makespan;
 * **travel**: every place where a chosen job is done is reached once, at its cheapest way in;
 * **shared robots**: two jobs that must share their robots are not both chosen when fewer
   robots than either needs can do both.
@@ -202,5 +203,20 @@ def _chains(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, A
         if arrival:
             m.add(start[d] >= arrival).only_enforce_if(chosen[d])
         m.add(makespan >= start[d] + job.duration * chosen[d])
+    shared = set(problem.same_robots) | {(b, a) for a, b in problem.same_robots}
     for first, second in problem.precedences:
         m.add(start[second] >= start[first] + problem.jobs[first].duration * chosen[first])
+        trip = carry_time(problem, first, second) if (first, second) in shared else 0
+        if trip:  # the same robots go from the first's place to the second's in between
+            m.add(start[second] >= start[first] + problem.jobs[first].duration + trip).only_enforce_if(
+                [chosen[first], chosen[second]])
+
+
+def carry_time(problem: AllocationProblem, first: str, second: str) -> int:
+    """The quickest trip from ``first``'s place to ``second``'s of a robot able to do both: the
+    least time between them when the same robots do both (the trip times keep the triangle
+    inequality, so a detour through other places is never quicker)."""
+    a, b = problem.jobs[first], problem.jobs[second]
+    robots = {r.name: r for r in problem.fleet.robots}
+    return min((problem.time(robots[r], a.location, b.location) for r in a.candidates if r in b.candidates),
+               default=0)

@@ -9,6 +9,8 @@
    robots with a job already placed, those robots); it starts when its predecessors have ended
    and its robots arrived.  Taking the jobs in mission order instead would send each robot to
    all its first tasks before any second one, far and back.
+3. Local moves (:mod:`.improve`): tasks moved off the robot that finishes last, each move
+   evaluated exactly, while the schedule gets better.
 
 The hint only guides the search: CP-SAT checks it like any other assignment, and a mission
 where the greedy step gets stuck (a decomposition needs robots that the greedy choice used up)
@@ -17,6 +19,7 @@ is simply searched without a hint.
 from __future__ import annotations
 
 import heapq
+import time
 from dataclasses import dataclass
 from graphlib import TopologicalSorter
 from typing import Sequence
@@ -24,7 +27,9 @@ from typing import Sequence
 from ..errors import MissionError
 from ..solve.decompose import DecompositionRequest
 from ..solve.optimize import CostModel
+from .improve import improve
 from .model import START, AllocationModel
+from .options import Objective
 from .problem import AllocationProblem
 from .schedule import chosen_predecessors
 
@@ -49,19 +54,30 @@ class WarmStart:
         return arcs
 
 
-def warm_start(problem: AllocationProblem, balanced: Sequence[list[str]] = ()) -> WarmStart | None:
+def warm_start(problem: AllocationProblem, balanced: Sequence[list[str]] = (), objective: Objective = Objective(),
+               time_limit: float = 10.0, seed: int = 0, floor: float | None = None) -> WarmStart | None:
     """The list schedule of the least-work decomposition or of one of ``balanced`` (the load
-    relaxation's), whichever ends first; None when there is none."""
-    plans: list[tuple[int, int, list[str], Plan]] = []
-    for chosen in (*balanced, least_work_decomposition(problem)):
-        if chosen is None or not all(d in problem.jobs for d in chosen):
-            continue
+    relaxation's), whichever is best for ``objective`` once improved by local moves
+    (:mod:`.improve`): a quarter of ``time_limit`` shared by all, the rest for the best of
+    them, none once one reaches ``floor`` (a lower bound on the objective); None when there is
+    none."""
+    started = time.perf_counter()
+    candidates = [c for c in (*balanced, least_work_decomposition(problem))
+                  if c is not None and all(d in problem.jobs for d in c)]
+    plans: list[tuple[float, int, list[str], Plan]] = []
+    for number, chosen in enumerate(candidates):
         plan = greedy_plan(problem, chosen)
         if plan is not None:
-            teams, start = plan
-            plans.append((max((start[j] + problem.jobs[j].duration for j in chosen), default=0), len(plans), chosen,
-                          plan))
-    for _, _, chosen, plan in sorted(plans, key=lambda p: p[:2]):
+            share = (time_limit / 4 - (time.perf_counter() - started)) / (len(candidates) - number)
+            teams, start, value = improve(problem, chosen, *plan, objective, share, seed, floor)
+            plans.append((value, len(plans), chosen, (teams, start)))
+    plans.sort(key=lambda p: p[:2])
+    if plans:
+        _, _, chosen, plan = plans[0]
+        teams, start, value = improve(problem, chosen, *plan, objective, time_limit - (time.perf_counter() - started),
+                                      seed + 1, floor)
+        plans[0] = (value, 0, chosen, (teams, start))
+    for _, _, chosen, plan in plans:
         values = _decomposition_values(problem, set(chosen))
         if values is not None:
             return WarmStart(chosen, *plan, values)

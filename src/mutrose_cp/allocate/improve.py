@@ -1,0 +1,247 @@
+"""Local improvement of a list schedule: move tasks between robots while the schedule gets better.
+
+List scheduling (:mod:`.warmstart`) is greedy: it sends a robot across the map for the task that
+can end soonest now, and it leaves the last robot to finish with far more than the others.  This
+descent fixes both, before the schedule is handed to CP-SAT as its hint:
+
+* a *unit* is a chosen job and the jobs that must share its robot (execution constraints), done
+  by one robot; units done by a team stay where they are;
+* a move takes a unit off a robot (the one that finishes last first) and inserts each of its jobs, in order,
+  where it adds the least travel to another able robot's sequence (*relocate*), or to its own
+  (*reorder*);
+* every move is evaluated exactly (:func:`evaluate`: each job as early as its predecessors and
+  its robots' sequences allow, the trips at each robot's speed) and kept when it lowers the
+  objective, or keeps it and lowers the sum of the robots' finishing times, which spreads the
+  work and opens the way for the next move.
+
+From a local optimum, a few units moved to random able robots (seeded) start a new descent, and
+the best schedule is kept: an iterated local search.  It stops after ``MAX_EVALUATIONS``
+schedules, after ``STALL`` kicks in a row that found nothing better, when the objective reaches
+a lower bound, or at its time limit, whichever comes first; unless the time limit comes first,
+it is deterministic.
+"""
+from __future__ import annotations
+
+import random
+import time
+from dataclasses import dataclass
+from typing import Callable, Mapping, Sequence
+
+from .options import Objective
+from .problem import AllocationProblem
+from .schedule import chosen_predecessors
+
+MAX_EVALUATIONS = 40_000  # schedules evaluated, at most
+KICK = 3  # units moved at random to leave a local optimum
+STALL = 200  # kicks without a better schedule, at most
+
+Sequences = dict[str, list[str]]  # robot -> its jobs in the order it does them
+
+
+@dataclass(frozen=True)
+class Evaluated:
+    """A schedule of the sequences: start times, and what the descent compares."""
+
+    start: dict[str, int]
+    score: tuple[float, int]  # (objective, sum of the robots' finishing times)
+
+
+class _Evaluator:
+    """Earliest start times of fixed robot sequences (see :func:`evaluate`)."""
+
+    def __init__(self, problem: AllocationProblem, chosen: Sequence[str], objective: Objective) -> None:
+        self.problem = problem
+        self.objective = objective
+        self.robots = {r.name: r for r in problem.fleet.robots}
+        self.before = chosen_predecessors(problem, set(chosen))
+        self.chosen = list(chosen)
+        self.count = 0
+        self.trips: dict[tuple[str, str | None, str | None], int] = {}
+        self.after: dict[str, list[str]] = {}
+        for j in self.chosen:
+            for i in self.before[j]:
+                self.after.setdefault(i, []).append(j)
+
+    def __call__(self, sequences: Mapping[str, Sequence[str]]) -> Evaluated | None:
+        """The schedule, or None when the sequences contradict the precedences (a cycle)."""
+        self.count += 1
+        jobs = self.problem.jobs
+        waiting = {j: len(self.before[j]) for j in self.chosen}
+        previous: dict[str, list[tuple[str, str | None]]] = {}  # job -> (robot, the robot's job before)
+        for robot, sequence in sequences.items():
+            for i, j in enumerate(sequence):
+                previous.setdefault(j, []).append((robot, sequence[i - 1] if i else None))
+                waiting[j] += 1 if i else 0
+        after = self.after
+        nxt: dict[str, list[str]] = {}
+        for sequence in sequences.values():
+            for a, b in zip(sequence, sequence[1:]):
+                nxt.setdefault(a, []).append(b)
+        place: dict[tuple[str, str], str | None] = {}  # (job, robot) -> the robot's place after the job
+        start: dict[str, int] = {}
+        end: dict[str, int] = {}
+        ready = [j for j in self.chosen if not waiting[j]]
+        travel = 0
+        while ready:
+            j = ready.pop()
+            at = max((end[i] for i in self.before[j]), default=0)
+            for robot, p in previous.get(j, ()):
+                origin = place[(p, robot)] if p is not None else self.robots[robot].start
+                trip = self.trip(robot, origin, jobs[j].location)
+                travel += trip
+                at = max(at, (end[p] if p is not None else 0) + trip)
+                place[(j, robot)] = jobs[j].location or origin
+            start[j], end[j] = at, at + jobs[j].duration
+            for k in after.get(j, []) + nxt.get(j, []):
+                waiting[k] -= 1
+                if not waiting[k]:
+                    ready.append(k)
+        if len(start) < len(self.chosen):
+            return None
+        finish = [end[s[-1]] for s in sequences.values() if s]
+        makespan = max(end.values(), default=0)
+        return Evaluated(start, (self.objective.value(makespan, travel), sum(finish)))
+
+
+    def trip(self, robot: str, a: str | None, b: str | None) -> int:
+        key = (robot, a, b)
+        if key not in self.trips:
+            self.trips[key] = self.problem.time(self.robots[robot], a, b)
+        return self.trips[key]
+
+
+def evaluate(problem: AllocationProblem, chosen: Sequence[str], sequences: Mapping[str, Sequence[str]],
+             objective: Objective = Objective()) -> Evaluated | None:
+    """Each chosen job as early as its predecessors and its robots allow, every robot doing its
+    jobs in the order of ``sequences`` and travelling from its last place at its speed; None when
+    the orders and the precedences form a cycle."""
+    return _Evaluator(problem, chosen, objective)(sequences)
+
+
+def improve(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str, tuple[str, ...]],
+            start: Mapping[str, int], objective: Objective, time_limit: float, seed: int = 0,
+            floor: float | None = None) -> tuple[dict[str, tuple[str, ...]], dict[str, int], float]:
+    """The descent of the module docstring from the schedule ``teams`` / ``start`` of
+    ``chosen``, restarted from random kicks (``seed``) while the budget lasts and the objective
+    is above ``floor`` (a lower bound: nothing better exists); returns the teams, start times
+    and objective of the best schedule found."""
+    deadline = time.perf_counter() + time_limit
+    evaluator = _Evaluator(problem, chosen, objective)
+    sequences = {r.name: sorted((j for j in chosen if r.name in teams[j]), key=lambda j: (start[j], j))
+                 for r in problem.fleet.robots}
+    first = evaluator(sequences)
+    if first is None:  # the start times contradict the precedences: not a schedule to improve
+        return dict(teams), dict(start), float("inf")
+    units = _units(problem, chosen, teams)
+    stall = 0  # kicks since the last improvement
+
+    def left() -> bool:
+        return evaluator.count < MAX_EVALUATIONS and stall < STALL and time.perf_counter() < deadline
+
+    sequences, best = _descend(problem, evaluator, sequences, first, units, left)
+    rng = random.Random(seed)
+    while units and left() and (floor is None or best.score[0] > floor):
+        stall += 1
+        kicked = _kick(problem, sequences, units, rng)
+        moved = evaluator(kicked)
+        if moved is None:
+            continue
+        trial, result = _descend(problem, evaluator, kicked, moved, units, left)
+        if result.score < best.score:
+            sequences, best, stall = trial, result, 0
+    teams_out = {j: tuple(r for r in sequences if j in sequences[r]) for j in chosen}
+    return teams_out, best.start, best.score[0]
+
+
+def _descend(problem: AllocationProblem, evaluator: _Evaluator, sequences: Sequences, best: Evaluated,
+             units: list[list[str]], left: Callable[[], bool]) -> tuple[Sequences, Evaluated]:
+    """Better moves while there are some and the budget lasts."""
+    while left():
+        found = _better_move(problem, evaluator, sequences, units, best)
+        if found is None:
+            break
+        sequences, best = found
+    return sequences, best
+
+
+def _kick(problem: AllocationProblem, sequences: Sequences, units: list[list[str]], rng: random.Random) -> Sequences:
+    """``KICK`` random units moved to random able robots: a way out of a local optimum."""
+    out = sequences
+    for unit in rng.sample(units, min(KICK, len(units))):
+        source = next(r for r, s in out.items() if unit[0] in s)
+        able = [r.name for r in problem.fleet.robots if all(r.name in problem.jobs[j].candidates for j in unit)]
+        order = {j: i for r in out for i, j in enumerate(out[r])}
+        out = _relocate(problem, out, sorted(unit, key=order.__getitem__), source, rng.choice(able))
+    return out
+
+
+def _units(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str, tuple[str, ...]]) -> list[list[str]]:
+    """The chosen jobs done by one robot, grouped with those that must share it, in a fixed
+    order; a group with a team job is left out."""
+    group = {j: j for j in chosen}
+
+    def root(j: str) -> str:
+        while group[j] != j:
+            j = group[j]
+        return j
+
+    for a, b in problem.same_robots:
+        if a in group and b in group:
+            group[root(a)] = root(b)
+    members: dict[str, list[str]] = {}
+    for j in chosen:
+        members.setdefault(root(j), []).append(j)
+    return [jobs for jobs in members.values() if all(len(teams[j]) == 1 for j in jobs)]
+
+
+def _better_move(problem: AllocationProblem, evaluator: _Evaluator, sequences: Sequences, units: list[list[str]],
+                 best: Evaluated) -> tuple[Sequences, Evaluated] | None:
+    """The first move that scores better than ``best``, off the robots that finish last first."""
+    end = {j: best.start[j] + problem.jobs[j].duration for j in best.start}
+    order = sorted((r for r in sequences if sequences[r]), key=lambda r: (-end[sequences[r][-1]], r))
+    for robot in order:
+        mine = [u for u in units if u[0] in sequences[robot]]
+        mine.sort(key=lambda u: -sum(problem.jobs[j].duration for j in u))
+        for unit in mine:
+            unit = sorted(unit, key=lambda j: (best.start[j], j))
+            for target in sorted(sequences, key=lambda r: (r != robot, end[sequences[r][-1]] if sequences[r] else 0, r)):
+                if not all(target in problem.jobs[j].candidates for j in unit):
+                    continue
+                moved = _relocate(problem, sequences, unit, robot, target)
+                result = evaluator(moved)
+                if result is not None and result.score < best.score:
+                    return moved, result
+                if evaluator.count >= MAX_EVALUATIONS:
+                    return None
+    return None
+
+
+def _relocate(problem: AllocationProblem, sequences: Sequences, unit: list[str], source: str, target: str) -> Sequences:
+    """``sequences`` with ``unit`` taken off ``source`` and each of its jobs inserted, in order,
+    where it adds the least travel to ``target``'s sequence."""
+    out = {r: list(s) for r, s in sequences.items()}
+    out[source] = [j for j in out[source] if j not in unit]
+    robot = next(r for r in problem.fleet.robots if r.name == target)
+    sequence = out[target]
+    earliest = 0
+    for j in unit:
+        place = problem.jobs[j].location
+        best_at, best_cost = len(sequence), None
+        for at in range(earliest, len(sequence) + 1):
+            before = _place_before(problem, sequence, at, robot.start)
+            after = problem.jobs[sequence[at]].location if at < len(sequence) else None
+            cost = problem.time(robot, before, place) + problem.time(robot, place, after or place) - (
+                problem.time(robot, before, after) if after else 0)
+            if best_cost is None or cost < best_cost:
+                best_at, best_cost = at, cost
+        sequence.insert(best_at, j)
+        earliest = best_at + 1
+    return out
+
+
+def _place_before(problem: AllocationProblem, sequence: list[str], at: int, origin: str | None) -> str | None:
+    """Where a robot is before the ``at``-th job of its sequence."""
+    for j in reversed(sequence[:at]):
+        if problem.jobs[j].location is not None:
+            return problem.jobs[j].location
+    return origin
