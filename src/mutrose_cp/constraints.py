@@ -99,8 +99,10 @@ def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constra
 
 def _first_per_pair(kind: ConstraintKind, own: list[tuple[int, int]],
                     inherited: list[list[Constraint]]) -> list[Constraint]:
-    """The node's own links, then its subtrees' constraints, keeping the first for each
-    (first, second) pair: the node's own links win over those of its subtrees."""
+    """The node's own links, each pair once, then its subtrees' constraints.  An own link joins
+    two children, a subtree's constraint two vertices of one child, and two children share no
+    vertex: no pair is found twice across them (the original keeps the first of each pair; here
+    that leaves nothing to drop), so a forAll's parallel node just joins its copies' lists."""
     seen: set[tuple[int, int]] = set()
     out: list[Constraint] = []
     for p in own:
@@ -108,10 +110,7 @@ def _first_per_pair(kind: ConstraintKind, own: list[tuple[int, int]],
             seen.add(p)
             out.append(Constraint(kind, *p))
     for constraints in inherited:
-        for c in constraints:
-            if (c.first, c.second) not in seen:
-                seen.add((c.first, c.second))
-                out.append(c)
+        out += constraints
     return out
 
 
