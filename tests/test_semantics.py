@@ -6,7 +6,9 @@ tests (differential, oracle, ordering) check the decomposers' use of them."""
 from __future__ import annotations
 
 import pytest
+from hypothesis import HealthCheck, given, settings
 
+from missiongen import load_mission, missions
 from mutrose_cp.constraints import Constraint, EC, SEQ
 from mutrose_cp.expansion import TaskInstance
 from mutrose_cp.htn import DecompositionPath, GroundPredicates, TreeNode
@@ -329,3 +331,23 @@ def test_seen_selects_writers_by_runs_and_single_vertices():
     assert list(Seen(((0, 3),), frozenset({2, 9, 10})).select(items, positions)) == ["w1", "w2", "w9"]
     assert list(Seen(((8, 10),), frozenset({1})).select(items, positions)) == ["w1", "w9"]
     assert list(Seen(()).select(items, positions)) == []
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(missions())
+def test_seen_runs_agree_with_seen_sets_on_random_missions(spec):
+    """The depth-first numbering the runs rely on holds on random mission shapes too (nested
+    forAll, tasks beside goals, OR goals, unique branches)."""
+    try:
+        tg = load_mission(spec).task_graph
+    except Exception:  # noqa: BLE001 - missions the pipeline refuses have no Task Graph
+        return
+    scopes = EffectScopes(tg)
+    decompositions = [d.index for d in tg.decompositions()]
+    for v in range(len(tg.vertices)):
+        if isinstance(tg.vertices[v], TaskVertex):
+            assert list(scopes.seen_runs_by_task(v).select(decompositions, decompositions)) == sorted(
+                scopes.seen_by_task(v))
+        elif not isinstance(tg.vertices[v], DecompositionVertex):
+            assert list(scopes.seen_runs_by_achieve(v).select(decompositions, decompositions)) == sorted(
+                scopes.seen_by_achieve(v))
