@@ -13,7 +13,7 @@ import pytest
 from mutrose_cp.errors import NoDecompositionError
 from mutrose_cp.mission import Mission
 
-from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
+from missiongen import Action, Change, Cmp, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
 
 SET_CLEAN = Action("act0", (), (Lit("clean", "?rm"),))
 UNSET_CLEAN = Action("act1", (), (Lit("clean", "?rm", False),))
@@ -89,6 +89,19 @@ def test_a_task_sees_the_writers_of_its_branch_not_those_of_a_parallel_one():
     spec = dataclasses.replace(_spec(tree, _task("TaskA", "act1", "act3"), _task("TaskB", "act0", "act3"),
                                      _task("TaskD", "act7")), actions=(*ACTIONS, needs_clean))
     assert _solve(spec) == {_md("AT1_1|2", "AT2_1|1", "AT3_1|1")}
+
+
+def test_a_task_sees_the_numeric_writers_of_its_branch_not_those_of_a_parallel_one():
+    """The same with a number: AT1 # (AT2 ; AT3), TaskA may raise the level by 2, TaskB by 1,
+    TaskD needs it at 1 (from 0).  AT3 sees only AT2's change, although AT1 writes first in Task
+    Graph order: TaskB must raise it, whatever TaskA does."""
+    up2, up1 = Action("act7", (), (Change("increase", 2),)), Action("act8", (), (Change("increase", 1),))
+    needs1 = Action("act9", (Cmp("=", 1),), ())
+    tree = GoalNode((TaskNode("TaskA"), GoalNode((TaskNode("TaskB"), TaskNode("TaskD")), annotation=("flat", ";"))),
+                    annotation=("flat", "#"))
+    spec = dataclasses.replace(_spec(tree, _task("TaskA", "act7", "act3"), _task("TaskB", "act8", "act3"),
+                                     _task("TaskD", "act9")), actions=(*ACTIONS, up2, up1, needs1))
+    assert _solve(spec) == {_md("AT1_1|1", "AT2_1|1", "AT3_1|1"), _md("AT1_1|2", "AT2_1|1", "AT3_1|1")}
 
 
 def test_sequence_below_or_alternative_is_not_a_parallel_conflict():

@@ -13,6 +13,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from mutrose_cp.entry_templates import EntryTemplates
+from mutrose_cp.errors import MissionError
 from mutrose_cp.mission import Mission, find_mission_files
 from mutrose_cp.model.configuration import SemanticMapping
 from mutrose_cp.output import OutputBuilder, OutputModel, PredicatePrinter, boost_json
@@ -48,8 +49,9 @@ def _reference_missions(reference: Path) -> list[tuple[Path, str | None]]:
 def test_every_reference_mission(reference):
     for folder, config in _reference_missions(reference):
         mission = Mission.load(*find_mission_files(folder, config))
-        alone, stamped, _ = _entries(mission)
+        alone, stamped, templates = _entries(mission)
         assert stamped == alone, folder
+        assert None not in templates._predicates.values(), folder  # every template passed its self-check
 
 
 @pytest.mark.parametrize("family, n", [("vital-signs", 40), ("delivery", 12), ("pickup", 12)])
@@ -111,3 +113,25 @@ def test_a_value_that_is_a_constant_of_the_path(tmp_path):
     assert len(room102) == 1 and len(clear) > 1
     assert all(e.count(".is_cleared") == 2 for e in clear if e not in room102)
     assert room102[0].count(".is_cleared") == 1
+
+
+def test_a_value_named_like_a_variable_is_printed_alone(tmp_path):
+    """A world value starting with "?" reads as a variable to the printer, which refuses it when
+    no mapping fits: that instance is not filled from the others' template."""
+    folder = tmp_path / "mission"
+    shutil.copytree(ROOT / "examples" / "hospital-disinfection", folder)
+    world = next((folder / "knowledge").glob("*.xml"))
+    world.write_text(world.read_text().replace("<name>Room104</name>", "<name>?Room104</name>"))
+    mission = Mission.load(*find_mission_files(folder))
+    builder = OutputBuilder(OutputModel(mission.task_graph, [], [], mission.domain, mission.config,
+                                        mission.initial_state))
+    templates = EntryTemplates(mission.domain, builder.printer, builder.printer.sorts)
+    for d in builder.decs:
+        try:
+            alone = boost_json(builder.task_entry(d.decomposition, d.group, d.divisible), 8)
+        except MissionError as err:
+            with pytest.raises(MissionError, match="No Semantic Mapping"):
+                templates.entry(d.decomposition, d.group, d.divisible)
+            assert "?Room104" in str(err)
+        else:
+            assert templates.entry(d.decomposition, d.group, d.divisible) == alone

@@ -19,11 +19,12 @@ import re
 from typing import TYPE_CHECKING, Callable, Hashable, Mapping
 
 from .boost_json import _escape, boost_json
+from .errors import MissionError
 from .htn import ground_path
 
 if TYPE_CHECKING:
     from .expansion import Value
-    from .htn import DecompositionPath
+    from .htn import DecompositionPath, Step
     from .model import Domain, RobotNumber
     from .model.task_graph import Decomposition
     from .output import PredicatePrinter, PrintedPredicate
@@ -72,7 +73,8 @@ class EntryTemplates:
         self.printer = printer
         self.sorts = sorts
         self._heads: dict[str, str] = {}
-        self._actions: dict[int, tuple[DecompositionPath, str, frozenset[str]]] = {}
+        self._actions: dict[int, tuple[DecompositionPath, str, frozenset[str], int]] = {}
+        self._same_steps: dict[tuple[Step, ...], int] = {}  # a path expanded per instance (recursion)
         self._small: dict[Hashable, str] = {}
         self._sort_of: dict[str, tuple[str, ...]] = {}
         self._predicates: dict[Hashable, _Template | None] = {}
@@ -87,15 +89,18 @@ class EntryTemplates:
                 "arguments", boost_json({p.name: p.type for p in task.parameters}, 12)))
         return head
 
-    def _path(self, path: DecompositionPath) -> tuple[str, frozenset[str]]:
-        """The ``decomposition`` member and the constants the path's steps name."""
+    def _path(self, path: DecompositionPath) -> tuple[str, frozenset[str], int]:
+        """The ``decomposition`` member, the constants the path's steps name, and the path's key
+        in templates: paths with the same steps share it (recursive methods give each instance a
+        path of its own, mostly with the same steps)."""
         known = self._actions.get(id(path))
         if known is None:
             actions = {f"a{i}": {"name": s.name, "arguments": " ".join(s.args)} for i, s in enumerate(path.actions)}
             constants = frozenset(a for s in path.steps for c in (*s.preconditions, *s.effects, *s.numeric_effects)
                                   for a in c.args if not a.startswith("?"))
-            known = self._actions[id(path)] = (path, _member("decomposition", boost_json(actions, 12)), constants)
-        return known[1], known[2]
+            same = self._same_steps.setdefault(path.steps, id(path))
+            known = self._actions[id(path)] = (path, _member("decomposition", boost_json(actions, 12)), constants, same)
+        return known[1], known[2], known[3]
 
     def _cached(self, key: Hashable, make: Callable[[], str]) -> str:
         text = self._small.get(key)
@@ -115,14 +120,14 @@ class EntryTemplates:
             known = self._sort_of[value] = tuple(s for s, members in self.sorts.items() if value in members)
         return known
 
-    def _predicates_text(self, dec: Decomposition, constants: frozenset[str]) -> str:
+    def _predicates_text(self, dec: Decomposition, constants: frozenset[str], path_key: int) -> str:
         values: list[str] = []
         slot: dict[str, int] = {}
         symbolic: dict[str, Value] = {}
         shape: list[Hashable] = []
 
         def placeholder(v: str) -> str:
-            if v in constants:
+            if v in constants or v.startswith("?"):  # printing tells a "?" value from a value
                 shape.append(("constant", v))
                 return v
             k = slot.get(v)
@@ -140,7 +145,7 @@ class EntryTemplates:
                 symbolic[param] = tuple(placeholder(v) for v in value)
             else:
                 symbolic[param] = placeholder(value)
-        key = (dec.instance.name, id(dec.path), tuple(shape))
+        key = (dec.instance.name, path_key, tuple(shape))
         escaped = [_escape(v)[1:-1] for v in values]
         if key in self._predicates:
             template = self._predicates[key]
@@ -155,7 +160,7 @@ class EntryTemplates:
         real = {f"{_SLOT_MARK}{k}{_SLOT_MARK}": v for k, v in enumerate(values)}
         try:
             printed = self.printer.printed(dec, ground_path(dec.path, symbolic), real)
-        except Exception:  # noqa: BLE001 - a placeholder in an error: the direct path reports it
+        except MissionError:  # a placeholder in an error: the direct path reports it
             return None
         template = _Template(predicate_members(printed))
         return template if template.fill(escaped) == direct else None
@@ -170,14 +175,14 @@ class EntryTemplates:
             if pv.hddl_param in values:
                 values[pv.hddl_param] = "[" + ",".join(pv.value) + "]" if isinstance(pv.value, tuple) else pv.value
         loc = inst.location
-        decomposition, constants = self._path(dec.path)
+        decomposition, constants, path_key = self._path(dec.path)
         members = (
             _member("id", _escape(dec.id)),
             self._head(inst.name),
             _member("arguments_values", boost_json(values, 12)),
             _member("locations", boost_json(list(loc) if isinstance(loc, tuple) else (loc or ""), 12)),
             self._cached(("robots", inst.robot_number), lambda: self._robots(inst.robot_number)),
-            self._predicates_text(dec, constants),
+            self._predicates_text(dec, constants, path_key),
             self._cached(("events", inst.triggering_events), lambda: _member(
                 "triggering_events", boost_json(list(inst.triggering_events), 12))),
             decomposition,

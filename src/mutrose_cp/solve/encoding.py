@@ -81,7 +81,8 @@ class Encoder:
         self._bool_chains: dict[AtomKey, _Chain[tuple[Lit, Lit]]] = {}
         self._num_chains: dict[AtomKey, _Chain[tuple[Lit, int | None]]] = {}
         self._bool_prefixes: dict[AtomKey, list[_Chain[tuple[Lit, Lit]]]] = {}  # after the first k writers
-        self._writer_positions: dict[AtomKey, list[int]] = {}
+        self._writer_positions: dict[Any, list[int]] = {}
+        self._num_prefixes: dict[AtomKey, list[tuple[_Chain[tuple[Lit, int | None]], int]]] = {}
         order = application_order(self.effects)
         self.bool_writers: dict[AtomKey, list[tuple[int, bool]]] = {}
         self.num_writers: dict[AtomKey, list[tuple[int, str, float]]] = {}
@@ -227,25 +228,46 @@ class Encoder:
 
     def _num_value(self, atom: AtomKey, writers: Sequence[tuple[int, str, float]]) -> tuple[Lit, int | None]:
         """(known literal, integer variable) of ``atom`` after the chosen ``writers``: a chain of
-        :class:`ValueAfter` steps shared by the tests that see a common prefix of writers (as
-        :meth:`_bool_value`); the variable is None before the first writer."""
+        :class:`ValueAfter` steps shared by the tests that see a common prefix of writers, and
+        looked up by length for a prefix of all of them (as :meth:`_bool_value`); the variable is
+        None before the first writer."""
         init = self.values.get(atom)
-        prev_const = round(init * SCALE) if init is not None else 0
-        node = self._chain_root(atom, self._num_chains, lambda _: (TRUE if init is not None else FALSE, None))
-        span = abs(prev_const) + 1
+        root = self._chain_root(atom, self._num_chains, lambda _: (TRUE if init is not None else FALSE, None))
+        everyone = self.num_writers.get(atom, [])
+        k = len(writers)
+        if k and k <= len(everyone) and writers[-1] is everyone[k - 1]:  # a subsequence: this is a prefix
+            prefix = self._num_prefixes.setdefault(atom, [(root, self._num_span(init))])
+            while len(prefix) <= k:
+                node, span = prefix[-1]
+                w, kind, amount = everyone[len(prefix) - 1]
+                span += abs(round(amount * SCALE))
+                prefix.append((self._num_step(atom, node, w, kind, amount, span, init), span))
+            return prefix[k][0].value
+        node, span = root, self._num_span(init)
         for w, kind, amount in writers:
-            scaled = round(amount * SCALE)
-            span += abs(scaled)
-            step = node.next.get((w, kind, scaled))
-            if step is None:
-                known, prev_var = node.value
-                xw = self.x[w]
-                name = f"{_atom_name(atom)} after {self.tg.vertices[w].content}"
-                nxt = self.m.new_int(name, -span, span)
-                self.m.records.append(ValueAfter(xw, known, nxt, prev_var, prev_const, scaled, NumericEffectKind(kind)))
-                step = node.next[(w, kind, scaled)] = _Chain((self.m.or_of([known, xw], f"known {name}"), nxt))
-            node = step
+            span += abs(round(amount * SCALE))
+            node = self._num_step(atom, node, w, kind, amount, span, init)
         return node.value
+
+    @staticmethod
+    def _num_span(init: float | None) -> int:
+        return abs(round(init * SCALE) if init is not None else 0) + 1
+
+    def _num_step(self, atom: AtomKey, node: "_Chain[tuple[Lit, int | None]]", w: int, kind: str, amount: float,
+                  span: int, init: float | None) -> "_Chain[tuple[Lit, int | None]]":
+        """The chain node after writer ``w`` (changing ``atom`` by ``kind`` and ``amount`` if chosen)
+        follows ``node``; ``span`` bounds the value's magnitude so far."""
+        scaled = round(amount * SCALE)
+        step = node.next.get((w, kind, scaled))
+        if step is None:
+            known, prev_var = node.value
+            xw = self.x[w]
+            name = f"{_atom_name(atom)} after {self.tg.vertices[w].content}"
+            nxt = self.m.new_int(name, -span, span)
+            prev_const = round(init * SCALE) if init is not None else 0
+            self.m.records.append(ValueAfter(xw, known, nxt, prev_var, prev_const, scaled, NumericEffectKind(kind)))
+            step = node.next[(w, kind, scaled)] = _Chain((self.m.or_of([known, xw], f"known {name}"), nxt))
+        return step
 
     def _state_test(self, test: Test, decs: Seen, name: str) -> Lit:
         """Literal for an achieve/context test evaluated after the chosen ``decs``."""
@@ -264,13 +286,14 @@ class Encoder:
 
     def _num_writers(self, atom: AtomKey, seen: Seen) -> Sequence[tuple[int, str, float]]:
         everyone = self.num_writers.get(atom, [])
-        return seen.select(everyone, [w[0] for w in everyone]) if everyone else everyone
+        return seen.select(everyone, self._writer_vertices(("function", atom), everyone)) if everyone else everyone
 
-    def _writer_vertices(self, atom: AtomKey, everyone: list[tuple[int, bool]]) -> list[int]:
-        """The decomposition vertices of ``atom``'s writers, in order (listed once per atom)."""
-        known = self._writer_positions.get(atom)
+    def _writer_vertices(self, key: Any, everyone: Sequence[tuple[Any, ...]]) -> list[int]:
+        """The decomposition vertices of an atom's writers, in order (listed once per atom; a
+        function's atom keyed apart from a predicate's of the same name)."""
+        known = self._writer_positions.get(key)
         if known is None:
-            known = self._writer_positions[atom] = [w[0] for w in everyone]
+            known = self._writer_positions[key] = [w[0] for w in everyone]
         return known
 
     # --- rules -------------------------------------------------------------------------------------

@@ -340,9 +340,6 @@ class Seen:
     runs: tuple[tuple[int, int], ...]  # [first, end) vertex indices, in order, disjoint
     single: frozenset[int] = frozenset()  # context-dependency enablers
 
-    def __contains__(self, d: object) -> bool:
-        return d in self.single or any(lo <= d < hi for lo, hi in self.runs)  # type: ignore[operator]
-
     def select(self, items: Sequence[T], positions: Sequence[int]) -> Sequence[T]:
         """The ``items`` whose vertex (``positions``, increasing) is seen, in order: a slice per
         run and per single vertex, found by bisection."""
