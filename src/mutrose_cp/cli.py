@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import shutil
 import sys
 import time
 from collections import Counter
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Sequence
+from typing import TYPE_CHECKING, Sequence
 
 from . import __version__
 from .batch.command import add_batch_parser
@@ -22,6 +21,7 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files, world_file
+from .option_types import count_option, seconds
 from .output_file import refuse_unsafe_outputs, written_together
 from .process import (FAILURES, Failure, command_settings, exit_process, failure_lines, failure_problems,
                       failure_status, prepare_process, reader_gone)
@@ -454,39 +454,6 @@ def cmd_compare(args: argparse.Namespace) -> int:
     return report.exit_status
 
 
-MAX_COUNT = 2**62  # beyond any listing that fits on a disk; CP-SAT's limits are 64-bit
-
-
-def _count_option(minimum: int, maximum: int = MAX_COUNT) -> Callable[[str], int]:
-    """An argparse type: an integer from ``minimum`` to ``maximum`` (a usage error, exit 2,
-    otherwise)."""
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if not minimum <= value <= maximum:
-            raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {maximum}")
-        return value
-    return parse
-
-
-MAX_SECONDS = 10**7  # about 115 days: any longer limit is a typo
-
-
-def _seconds(text: str) -> float:
-    """An argparse type: a positive number of seconds, at most ``MAX_SECONDS``."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
-    if value > MAX_SECONDS:
-        raise argparse.ArgumentTypeError(f"{text} is out of range: give at most {MAX_SECONDS} seconds")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     from .allocate.options import MAX_SEED, MAX_WORKERS
 
@@ -502,7 +469,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--lenient-xml", action="store_true",
                        help="read XML whose repair changes which records exist or how they nest, as the original "
                             "does (with warnings) instead of refusing it")
-        p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+        p.add_argument("--max-input-mb", type=count_option(1), default=256, metavar="MB",
                        help="refuse input files larger than this (default 256)")
 
     def common(p: argparse.ArgumentParser) -> None:
@@ -533,10 +500,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "JSON with [] and {} for empty lists, numbers as numbers")
     p.add_argument("--algorithm", choices=("cpsat", "exploratory"), default="cpsat",
                    help="cpsat (default): solver-backed, factored; exploratory: the original's explicit combination")
-    p.add_argument("--limit", type=_count_option(0), default=DEFAULT_LIMIT, metavar="K",
+    p.add_argument("--limit", type=count_option(0), default=DEFAULT_LIMIT, metavar="K",
                    help="cpsat: list the first K mission decompositions (0 = all; default 1000)")
-    p.add_argument("--sample", type=_count_option(1), metavar="K", help="cpsat: list K decompositions drawn uniformly at random")
-    p.add_argument("--seed", type=_count_option(0), default=0, help="random seed for --sample (default 0)")
+    p.add_argument("--sample", type=count_option(1), metavar="K", help="cpsat: list K decompositions drawn uniformly at random")
+    p.add_argument("--seed", type=count_option(0), default=0, help="random seed for --sample (default 0)")
     p.add_argument("--optimize", action="store_true",
                    help="cpsat: output the decomposition of least cost (fewest actions, or --costs)")
     p.add_argument("--costs", metavar="FILE", help='JSON cost file {"actions": {...}, "methods": {...}}')
@@ -546,7 +513,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                  "into DIR instead of the output file")
     p.add_argument("--ihtn-orderings", choices=("all", "one"), default="all",
                    help="--ihtn: every ordering of each decomposition (default), or only the first consistent one")
-    p.add_argument("--ihtn-max", type=_count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
+    p.add_argument("--ihtn-max", type=count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
                    help="--ihtn: refuse (exit 2) an export of more than N files (default 10000)")
     p.set_defaults(func=cmd_decompose)
 
@@ -560,11 +527,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gantt", metavar="FILE.png|svg", help="also draw the schedule (needs matplotlib)")
     p.add_argument("--objective", default="makespan", metavar="makespan|travel|weighted:A,B",
                    help="minimise the makespan (default), the total travel, or A * makespan + B * travel")
-    p.add_argument("--time-limit", type=_seconds, default=10.0, metavar="S",
+    p.add_argument("--time-limit", type=seconds, default=10.0, metavar="S",
                    help="stop the search after S seconds with the best schedule found (default 10)")
-    p.add_argument("--workers", type=_count_option(1, MAX_WORKERS), default=1, metavar="N",
+    p.add_argument("--workers", type=count_option(1, MAX_WORKERS), default=1, metavar="N",
                    help="CP-SAT search threads (default 1: the same schedule on every finished run)")
-    p.add_argument("--seed", type=_count_option(0, MAX_SEED), default=0, help="CP-SAT random seed (default 0)")
+    p.add_argument("--seed", type=count_option(0, MAX_SEED), default=0, help="CP-SAT random seed (default 0)")
     p.set_defaults(func=cmd_allocate)
 
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
@@ -586,12 +553,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
     p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
     p.add_argument("--lenient-xml", action="store_true", help="passed to the decomposers (see decompose)")
-    p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+    p.add_argument("--max-input-mb", type=count_option(1), default=256, metavar="MB",
                    help="refuse input files larger than this (default 256)")
-    p.add_argument("--time-limit", type=_seconds, default=DEFAULT_TIME_LIMIT, metavar="S",
+    p.add_argument("--time-limit", type=seconds, default=DEFAULT_TIME_LIMIT, metavar="S",
                    help=f"wall-time limit of each run in seconds (default {DEFAULT_TIME_LIMIT:g}); a run over it "
                         "is killed")
-    p.add_argument("--limit", type=_count_option(0), default=COMPARE_LIMIT, metavar="K",
+    p.add_argument("--limit", type=count_option(0), default=COMPARE_LIMIT, metavar="K",
                    help="compare the sets of decompositions up to K of them, else only their counts "
                         f"(default {COMPARE_LIMIT}; 0 = always)")
     p.add_argument("--original", metavar="PATH",
