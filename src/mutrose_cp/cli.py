@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Sequence
 
 from . import __version__
 from .batch.command import add_batch_parser
+from .counts import shown_count
 from .errors import MissionError, Problem
 from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import phase, signal_handlers
@@ -70,12 +71,6 @@ class _Progress:
         if total and done >= total:
             sys.stderr.write("\n")
         sys.stderr.flush()
-
-
-def _big(n: int) -> str:
-    """A count for a summary line: exact up to 15 digits, else its magnitude."""
-    digits = str(n)
-    return digits if len(digits) <= 15 else f"{digits[0]}.{digits[1:4]}e{len(digits) - 1} (exact: {len(digits)} digits)"
 
 
 def _summary(args: argparse.Namespace, data: dict, line: str, mission: Mission | None = None) -> None:
@@ -354,7 +349,8 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     _summary(args, data,
              f"decomposed: {data['task_instances']} task instances, {data['task_decompositions']} task "
              f"decompositions, constraints SEQ {kinds.get('SEQ', 0)} FB {kinds.get('FB', 0)} EC "
-             f"{kinds.get('EC', 0)}, {_big(total)} valid mission decompositions{note} -> {where} ({elapsed:.2f} s)", mission)
+             f"{kinds.get('EC', 0)}, {shown_count(total, digit_count=True)} valid mission decompositions{note} -> "
+             f"{where} ({elapsed:.2f} s)", mission)
     return 0
 
 
@@ -420,8 +416,8 @@ def cmd_count(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "count", "mission_decompositions": str(total), "components": len(space.components),
                     "seconds": round(elapsed, 3)},
-             f"counted: {_big(total)} valid mission decompositions in {len(space.components)} independent components "
-             f"({elapsed:.2f} s)", mission)
+             f"counted: {shown_count(total, digit_count=True)} valid mission decompositions in "
+             f"{len(space.components)} independent components ({elapsed:.2f} s)", mission)
     sys.stderr.flush()
     print(total)  # the bare count is the last line of stdout
     # like decompose: a mission whose tasks admit no valid combination is an error (status 3)
