@@ -31,6 +31,7 @@ from .solve.optimize import CostModel
 
 if TYPE_CHECKING:
     from .allocate.fleet import Fleet
+    from .allocate.travel import TravelTimes
 
 
 def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
@@ -130,16 +131,15 @@ def _check_domain(args: argparse.Namespace, mission: Mission) -> None:
             print(f"warning: {problem}", file=sys.stderr)
 
 
-def _check_fleet(mission: Mission, fleet: Fleet) -> None:
+def _check_fleet(mission: Mission, fleet: Fleet) -> TravelTimes:
     """The fleet's names against the mission, and travel times to every place the mission's
-    tasks are at (``check --fleet``, and before ``allocate`` solves)."""
-    from .allocate.problem import fleet_problems, task_places
-    from .allocate.travel import build_travel
+    tasks are at (``check --fleet``, and before ``allocate`` solves, which then uses them)."""
+    from .allocate.problem import fleet_problems, mission_travel
 
     problems = fleet_problems(mission, fleet)
     if problems:
         raise MissionError(problems)
-    build_travel(mission, fleet, task_places(mission, fleet))
+    return mission_travel(mission, fleet)
 
 
 def cmd_allocate(args: argparse.Namespace) -> int:
@@ -158,7 +158,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     _warn(args, mission)
     fleet = Fleet.read(args.fleet)
-    _check_fleet(mission, fleet)
+    travel = _check_fleet(mission, fleet)
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     schedule_path = Path(args.schedule) if args.schedule else out_path.with_name("schedule.json")
     _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
@@ -166,7 +166,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     progress = _AllocationProgress(not args.quiet, objective.name)
     try:
         with phase("allocating"):
-            allocation = mission.allocate(fleet, options, progress)
+            allocation = mission.allocate(fleet, options, progress, travel)
     finally:
         progress.close()
     with phase("writing the output"), written_together((schedule_path, out_path, args.gantt)):
