@@ -116,15 +116,28 @@ def test_no_travel_without_coordinates(tmp_path):
     assert doc["travel"] == 0 and doc["objective"]["status"] == "OPTIMAL"
 
 
-def test_the_api_gives_the_same_schedule(tmp_path):
-    from mutrose_cp.allocate import AllocationOptions, Fleet
+def test_the_api_gives_the_same_schedule(tmp_path, monkeypatch):
+    """... and each builds the travel table once: the command line checks the fleet with the
+    table it then allocates with."""
+    from mutrose_cp.allocate import AllocationOptions, Fleet, problem, travel
     from mutrose_cp.allocate.output import schedule_document
 
+    built: list[set[str]] = []
+    original = travel.build_travel
+
+    def build_travel(mission, fleet, needed):
+        built.append(set(needed))
+        return original(mission, fleet, needed)
+
+    for module in (travel, problem):  # wherever it is called from
+        monkeypatch.setattr(module, "build_travel", build_travel)
     checked(tmp_path, DELIVERY, FLEET)
+    assert len(built) == 1
     mission = Mission.load(*find_mission_files(DELIVERY))
     allocation = mission.allocate(Fleet.read(FLEET), AllocationOptions(time_limit=20))
     assert allocation.status == "OPTIMAL"
     assert schedule_document(allocation) == json.loads((tmp_path / "run-schedule.json").read_text())
+    assert len(built) == 2 and built[0] == built[1]
 
 
 # ----------------------------------------------------------------------------------------------

@@ -43,7 +43,30 @@ def _variants(tmp_path: Path) -> list[tuple[Path, Path]]:
     data["travel"]["times"] = {"Dock": {"CentralPharmacy": 70, "SupplyRoom": 90}, "WardB": {"Laboratory": 5}}
     table = tmp_path / "table.json"
     table.write_text(json.dumps(data))
-    return [(DELIVERY, FLEET), (DELIVERY, fewer), (DELIVERY, table), generate(5, 3, tmp_path)]
+    return [(DELIVERY, FLEET), (DELIVERY, fewer), (DELIVERY, table), generate(5, 3, tmp_path), _relay(tmp_path)]
+
+
+def _relay(tmp_path: Path) -> tuple[Path, Path]:
+    """One delivery between places 1 km apart, for two robots that cannot fetch (no
+    manipulation), one at each end: staff load the item at the pharmacy and the robot waiting at
+    the ward hands it over (a precedence without an execution constraint), so no robot travels.
+    A bound that put the 1 km trip between the two tasks would exceed the optimum."""
+    mission = tmp_path / "relay"
+    shutil.copytree(DELIVERY, mission, ignore=shutil.ignore_patterns("output", "fleet.json"))
+    places = "".join(f"<Location><name>{name}</name><reachable>True</reachable><staffed>True</staffed>"
+                     f"<has_drop_box>False</has_drop_box><x>{x}</x><y>0</y></Location>"
+                     for name, x in (("Pharmacy", 0), ("Ward", 1000)))
+    (mission / "knowledge" / "world_db.xml").write_text(
+        f"<world_db>{places}<Delivery><name>D1</name><item>Insulin pens</item><pickup>Pharmacy</pickup>"
+        "<destination>Ward</destination><is_collected>False</is_collected><is_delivered>False</is_delivered>"
+        "</Delivery></world_db>\n", encoding="utf-8")
+    fleet = json.loads(FLEET.read_text())
+    fleet["robots"] = [{"name": f"talker-{at}", "capabilities": ["navigation", "communication"], "start": at}
+                       for at in ("Pharmacy", "Ward")]
+    del fleet["travel"]["coordinates"]
+    path = tmp_path / "relay.json"
+    path.write_text(json.dumps(fleet))
+    return mission, path
 
 
 @pytest.mark.parametrize("objective", ["makespan", "weighted:2,1"])

@@ -239,6 +239,29 @@ def test_manifest_problems_are_located(tmp_path, capsys, jobs, message):
     assert not (tmp_path / "m.results.jsonl").exists()
 
 
+@pytest.mark.parametrize("value,message", [
+    ("inf", "inf is not a positive number of seconds"),
+    ("nan", "nan is not a positive number of seconds"),
+    ("-5", "-5 is not a positive number of seconds"),
+    ("1e8", "1e8 is out of range: give at most 10000000 seconds"),
+    ("soon", "expected a number of seconds, got 'soon'"),
+])
+def test_time_limit_is_checked_as_the_other_commands_check_it(tmp_path, capsys, value, message):
+    write_manifest(tmp_path / "m.json", [{"command": "count", "inputs": [str(EXAMPLES / "item-delivery")]}])
+    assert main(["batch", "--time-limit", value, str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert f"argument --time-limit: {message}" in err and "Traceback" not in err, err
+    assert not (tmp_path / "m.results.jsonl").exists()
+
+
+def test_time_limit_after_the_manifest_is_checked_too(tmp_path):
+    write_manifest(tmp_path / "m.json", [{"command": "count", "inputs": [str(EXAMPLES / "item-delivery")]}])
+    run = batch("m.json", "--time-limit", "inf", cwd=tmp_path)
+    assert run.returncode == 2
+    assert "argument --time-limit: inf is not a positive number of seconds" in run.stderr, run.stderr
+    assert "Traceback" not in run.stderr and not (tmp_path / "m.results.jsonl").exists()
+
+
 def test_json_syntax_and_csv_problems_are_located(tmp_path, capsys):
     (tmp_path / "m.json").write_text('{"jobs": [\n  {"command": "count",, }\n]}')
     assert main(["batch", str(tmp_path / "m.json")]) == 2

@@ -35,6 +35,17 @@ def test_count_prints_the_bare_number_last(capsys):
     assert err.strip().startswith("counted: 36 valid mission decompositions")
 
 
+def test_a_count_beyond_15_digits_is_summarised_by_its_magnitude(tmp_path, capsys, reference):
+    """50 independent deliveries with 3 ways each: 3**50 (24 digits) valid mission decompositions."""
+    import sys
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+    from generate import generate
+
+    code, out, err = _run(capsys, "count", *map(str, generate("delivery", 50, tmp_path)))
+    assert code == 0 and out.splitlines()[-1] == str(3**50)
+    assert err.strip().startswith("counted: 7.178e23 (exact: 24 digits) valid mission decompositions in "), err
+
+
 def test_limit_lists_a_prefix_of_the_full_listing(tmp_path, capsys):
     full, part = tmp_path / "all.json", tmp_path / "part.json"
     assert _run(capsys, "decompose", str(HOSPITAL), "--limit", "0", "-o", str(full))[0] == 0

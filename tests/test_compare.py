@@ -97,6 +97,24 @@ def test_an_xml_configuration_in_the_three_file_form(capsys, reference):
     assert code == 0 and report["agree"] and report["inputs"]["configuration"].endswith("configuration.xml")
 
 
+def test_the_table_shows_counts_beyond_15_digits_by_their_magnitude():
+    from mutrose_cp.compare import FAILED, FINISHED, CompareRequest, CompareReport, Comparison, Run
+    from mutrose_cp.compare_report import render_table
+
+    request = CompareRequest(Path("d.hddl"), Path("gm.txt"), Path("c.json"))
+    runs = [Run("cpsat", FINISHED, 1.0, 30.0, 0, count=3**50), Run("exploratory", FINISHED, 2.0, 40.0, 0, count=3**50),
+            Run("original", FAILED, 0.5, 10.0, 1, error="crashed")]
+    agreeing = Comparison("exploratory", "cpsat", {"count": True})
+    rows = render_table(CompareReport(request, runs, [agreeing])).splitlines()
+    assert [row.split()[-2] for row in rows[2:5]] == ["decompositions", "7.178e23", "7.178e23"]
+    assert rows[5].split()[-2:] == ["-", "-"]  # no count, not compared
+    assert rows[-1] == "agree: cpsat, exploratory (7.178e23 valid mission decompositions)"
+    for count, shown in ((10**15 - 1, "999999999999999"), (10**15, "1.000e15")):  # 15 digits exactly, 16 not
+        both = [Run(name, FINISHED, 1.0, 30.0, 0, count=count) for name in ("cpsat", "exploratory")]
+        assert render_table(CompareReport(request, both, [agreeing])).splitlines()[-1] == \
+            f"agree: cpsat, exploratory ({shown} valid mission decompositions)"
+
+
 def test_above_the_limit_only_the_counts_are_compared(capsys):
     code, report = _report(capsys, str(HOSPITAL), "--limit", "10")
     comparison, = report["comparisons"]

@@ -7,21 +7,22 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import shutil
 import sys
 import time
 from collections import Counter
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Sequence
+from typing import TYPE_CHECKING, Sequence
 
 from . import __version__
 from .batch.command import add_batch_parser
+from .counts import shown_count
 from .errors import MissionError, Problem
 from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files, world_file
+from .option_types import count_option, seconds
 from .output_file import refuse_unsafe_outputs, written_together
 from .process import (FAILURES, Failure, command_settings, exit_process, failure_lines, failure_problems,
                       failure_status, prepare_process, reader_gone)
@@ -30,6 +31,7 @@ from .solve.optimize import CostModel
 
 if TYPE_CHECKING:
     from .allocate.fleet import Fleet
+    from .allocate.travel import TravelTimes
 
 
 def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
@@ -70,12 +72,6 @@ class _Progress:
         if total and done >= total:
             sys.stderr.write("\n")
         sys.stderr.flush()
-
-
-def _big(n: int) -> str:
-    """A count for a summary line: exact up to 15 digits, else its magnitude."""
-    digits = str(n)
-    return digits if len(digits) <= 15 else f"{digits[0]}.{digits[1:4]}e{len(digits) - 1} (exact: {len(digits)} digits)"
 
 
 def _summary(args: argparse.Namespace, data: dict, line: str, mission: Mission | None = None) -> None:
@@ -135,16 +131,15 @@ def _check_domain(args: argparse.Namespace, mission: Mission) -> None:
             print(f"warning: {problem}", file=sys.stderr)
 
 
-def _check_fleet(mission: Mission, fleet: Fleet) -> None:
+def _check_fleet(mission: Mission, fleet: Fleet) -> TravelTimes:
     """The fleet's names against the mission, and travel times to every place the mission's
-    tasks are at (``check --fleet``, and before ``allocate`` solves)."""
-    from .allocate.problem import fleet_problems, task_places
-    from .allocate.travel import build_travel
+    tasks are at (``check --fleet``, and before ``allocate`` solves, which then uses them)."""
+    from .allocate.problem import fleet_problems, mission_travel
 
     problems = fleet_problems(mission, fleet)
     if problems:
         raise MissionError(problems)
-    build_travel(mission, fleet, task_places(mission, fleet))
+    return mission_travel(mission, fleet)
 
 
 def cmd_allocate(args: argparse.Namespace) -> int:
@@ -163,7 +158,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     _warn(args, mission)
     fleet = Fleet.read(args.fleet)
-    _check_fleet(mission, fleet)
+    travel = _check_fleet(mission, fleet)
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     schedule_path = Path(args.schedule) if args.schedule else out_path.with_name("schedule.json")
     _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
@@ -171,7 +166,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     progress = _AllocationProgress(not args.quiet, objective.name)
     try:
         with phase("allocating"):
-            allocation = mission.allocate(fleet, options, progress)
+            allocation = mission.allocate(fleet, options, progress, travel)
     finally:
         progress.close()
     with phase("writing the output"), written_together((schedule_path, out_path, args.gantt)):
@@ -354,7 +349,8 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     _summary(args, data,
              f"decomposed: {data['task_instances']} task instances, {data['task_decompositions']} task "
              f"decompositions, constraints SEQ {kinds.get('SEQ', 0)} FB {kinds.get('FB', 0)} EC "
-             f"{kinds.get('EC', 0)}, {_big(total)} valid mission decompositions{note} -> {where} ({elapsed:.2f} s)", mission)
+             f"{kinds.get('EC', 0)}, {shown_count(total, digit_count=True)} valid mission decompositions{note} -> "
+             f"{where} ({elapsed:.2f} s)", mission)
     return 0
 
 
@@ -420,8 +416,8 @@ def cmd_count(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "count", "mission_decompositions": str(total), "components": len(space.components),
                     "seconds": round(elapsed, 3)},
-             f"counted: {_big(total)} valid mission decompositions in {len(space.components)} independent components "
-             f"({elapsed:.2f} s)", mission)
+             f"counted: {shown_count(total, digit_count=True)} valid mission decompositions in "
+             f"{len(space.components)} independent components ({elapsed:.2f} s)", mission)
     sys.stderr.flush()
     print(total)  # the bare count is the last line of stdout
     # like decompose: a mission whose tasks admit no valid combination is an error (status 3)
@@ -454,39 +450,6 @@ def cmd_compare(args: argparse.Namespace) -> int:
     return report.exit_status
 
 
-MAX_COUNT = 2**62  # beyond any listing that fits on a disk; CP-SAT's limits are 64-bit
-
-
-def _count_option(minimum: int, maximum: int = MAX_COUNT) -> Callable[[str], int]:
-    """An argparse type: an integer from ``minimum`` to ``maximum`` (a usage error, exit 2,
-    otherwise)."""
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if not minimum <= value <= maximum:
-            raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {maximum}")
-        return value
-    return parse
-
-
-MAX_SECONDS = 10**7  # about 115 days: any longer limit is a typo
-
-
-def _seconds(text: str) -> float:
-    """An argparse type: a positive number of seconds, at most ``MAX_SECONDS``."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
-    if value > MAX_SECONDS:
-        raise argparse.ArgumentTypeError(f"{text} is out of range: give at most {MAX_SECONDS} seconds")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     from .allocate.options import MAX_SEED, MAX_WORKERS
 
@@ -502,7 +465,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--lenient-xml", action="store_true",
                        help="read XML whose repair changes which records exist or how they nest, as the original "
                             "does (with warnings) instead of refusing it")
-        p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+        p.add_argument("--max-input-mb", type=count_option(1), default=256, metavar="MB",
                        help="refuse input files larger than this (default 256)")
 
     def common(p: argparse.ArgumentParser) -> None:
@@ -533,10 +496,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "JSON with [] and {} for empty lists, numbers as numbers")
     p.add_argument("--algorithm", choices=("cpsat", "exploratory"), default="cpsat",
                    help="cpsat (default): solver-backed, factored; exploratory: the original's explicit combination")
-    p.add_argument("--limit", type=_count_option(0), default=DEFAULT_LIMIT, metavar="K",
+    p.add_argument("--limit", type=count_option(0), default=DEFAULT_LIMIT, metavar="K",
                    help="cpsat: list the first K mission decompositions (0 = all; default 1000)")
-    p.add_argument("--sample", type=_count_option(1), metavar="K", help="cpsat: list K decompositions drawn uniformly at random")
-    p.add_argument("--seed", type=_count_option(0), default=0, help="random seed for --sample (default 0)")
+    p.add_argument("--sample", type=count_option(1), metavar="K", help="cpsat: list K decompositions drawn uniformly at random")
+    p.add_argument("--seed", type=count_option(0), default=0, help="random seed for --sample (default 0)")
     p.add_argument("--optimize", action="store_true",
                    help="cpsat: output the decomposition of least cost (fewest actions, or --costs)")
     p.add_argument("--costs", metavar="FILE", help='JSON cost file {"actions": {...}, "methods": {...}}')
@@ -546,7 +509,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                  "into DIR instead of the output file")
     p.add_argument("--ihtn-orderings", choices=("all", "one"), default="all",
                    help="--ihtn: every ordering of each decomposition (default), or only the first consistent one")
-    p.add_argument("--ihtn-max", type=_count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
+    p.add_argument("--ihtn-max", type=count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
                    help="--ihtn: refuse (exit 2) an export of more than N files (default 10000)")
     p.set_defaults(func=cmd_decompose)
 
@@ -560,11 +523,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gantt", metavar="FILE.png|svg", help="also draw the schedule (needs matplotlib)")
     p.add_argument("--objective", default="makespan", metavar="makespan|travel|weighted:A,B",
                    help="minimise the makespan (default), the total travel, or A * makespan + B * travel")
-    p.add_argument("--time-limit", type=_seconds, default=10.0, metavar="S",
+    p.add_argument("--time-limit", type=seconds, default=10.0, metavar="S",
                    help="stop the search after S seconds with the best schedule found (default 10)")
-    p.add_argument("--workers", type=_count_option(1, MAX_WORKERS), default=1, metavar="N",
+    p.add_argument("--workers", type=count_option(1, MAX_WORKERS), default=1, metavar="N",
                    help="CP-SAT search threads (default 1: the same schedule on every finished run)")
-    p.add_argument("--seed", type=_count_option(0, MAX_SEED), default=0, help="CP-SAT random seed (default 0)")
+    p.add_argument("--seed", type=count_option(0, MAX_SEED), default=0, help="CP-SAT random seed (default 0)")
     p.set_defaults(func=cmd_allocate)
 
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
@@ -586,12 +549,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
     p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
     p.add_argument("--lenient-xml", action="store_true", help="passed to the decomposers (see decompose)")
-    p.add_argument("--max-input-mb", type=_count_option(1), default=256, metavar="MB",
+    p.add_argument("--max-input-mb", type=count_option(1), default=256, metavar="MB",
                    help="refuse input files larger than this (default 256)")
-    p.add_argument("--time-limit", type=_seconds, default=DEFAULT_TIME_LIMIT, metavar="S",
+    p.add_argument("--time-limit", type=seconds, default=DEFAULT_TIME_LIMIT, metavar="S",
                    help=f"wall-time limit of each run in seconds (default {DEFAULT_TIME_LIMIT:g}); a run over it "
                         "is killed")
-    p.add_argument("--limit", type=_count_option(0), default=COMPARE_LIMIT, metavar="K",
+    p.add_argument("--limit", type=count_option(0), default=COMPARE_LIMIT, metavar="K",
                    help="compare the sets of decompositions up to K of them, else only their counts "
                         f"(default {COMPARE_LIMIT}; 0 = always)")
     p.add_argument("--original", metavar="PATH",

@@ -11,18 +11,11 @@ from typing import Any, Sequence
 
 from .charts import chart_format, figure, save_chart
 from .compare import FINISHED, TIMED_OUT, CompareReport, Comparison, Run
+from .counts import shown_count
 from .output_compare import nearest
 
 SHOWN = 5  # differences of each kind in the table
 LISTED = 40  # differences of each kind in the JSON object
-
-
-def _count(n: int | None) -> str:
-    """A count for the table: exact up to 15 digits, else its magnitude."""
-    if n is None:
-        return "-"
-    digits = str(n)
-    return digits if len(digits) <= 15 else f"{digits[0]}.{digits[1:4]}e{len(digits) - 1}"
 
 
 def _agrees(report: CompareReport, run: Run) -> str:
@@ -35,7 +28,7 @@ def _agrees(report: CompareReport, run: Run) -> str:
 
 
 def _rows(report: CompareReport) -> list[tuple[str, ...]]:
-    return [(r.decomposer, r.status, f"{r.seconds:.2f} s", f"{r.peak_mb:.1f} MB", _count(r.count),
+    return [(r.decomposer, r.status, f"{r.seconds:.2f} s", f"{r.peak_mb:.1f} MB", shown_count(r.count),
              _agrees(report, r)) for r in report.runs]
 
 
@@ -107,7 +100,7 @@ def _verdict(report: CompareReport) -> str:
     if not report.agree:
         differing = [c.decomposer for c in report.comparisons if not c.agree]
         return f"DISAGREE: {', '.join(differing)} {'differs' if len(differing) == 1 else 'differ'} from {report.reference}"
-    counts = _count(next(r.count for r in report.runs if r.status == FINISHED))
+    counts = shown_count(next(r.count for r in report.runs if r.status == FINISHED))
     return f"agree: {', '.join(finished)} ({counts} valid mission decompositions)"
 
 

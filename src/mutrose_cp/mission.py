@@ -33,6 +33,7 @@ if TYPE_CHECKING:  # the solvers import OR-Tools, which takes a while: loaded wh
     from .allocate import AllocationOptions, Fleet
     from .allocate.allocation import Allocation
     from .allocate.search import Progress
+    from .allocate.travel import TravelTimes
     from .solve.cpsat import DecompositionSpace
     from .solve.decompose import DecompositionRequest, DecompositionResult
     from .solve.embedding import DecompositionModel
@@ -285,12 +286,13 @@ class Mission:
         return DecompositionModel.build(self)
 
     def allocate(self, fleet: Fleet, options: AllocationOptions | None = None,
-                 progress: Callable[[Progress], None] | None = None) -> Allocation:
+                 progress: Callable[[Progress], None] | None = None, travel: TravelTimes | None = None) -> Allocation:
         """A valid mission decomposition, its robots and its schedule chosen together for
-        ``fleet``, with travel (see ``allocate/``); everything ``mutrose-cp allocate`` does."""
+        ``fleet``, with travel (see ``allocate/``); everything ``mutrose-cp allocate`` does.
+        ``travel``: the fleet's table, when already built to check the fleet."""
         from .allocate import AllocationOptions, allocate
 
-        return allocate(self, fleet, options if options is not None else AllocationOptions(), progress)
+        return allocate(self, fleet, options if options is not None else AllocationOptions(), progress, travel)
 
     def output_path(self) -> Path:
         return resolve_output_path(self.config.output.file_path, self.config_path)

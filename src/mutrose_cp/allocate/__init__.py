@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from .options import AllocationOptions, Objective
     from .problem import NoAllocationError
     from .search import Progress
+    from .travel import TravelTimes
 
 # the public names, each loaded from its module on first use: the command line reads the bounds
 # of .options for every command, which must not load the fleet reader and the allocation problem
@@ -44,10 +45,10 @@ __all__ = ["AllocationOptions", "Durations", "Fleet", "NoAllocationError", "Obje
 
 
 def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions | None = None,
-             progress: Callable[[Progress], None] | None = None) -> Allocation:
+             progress: Callable[[Progress], None] | None = None, travel: TravelTimes | None = None) -> Allocation:
     """Allocate ``mission`` to ``fleet`` (see :func:`.allocation.allocate`); default options
     when none are given."""
     from .allocation import allocate as run
     from .options import AllocationOptions
 
-    return run(mission, fleet, options if options is not None else AllocationOptions(), progress)
+    return run(mission, fleet, options if options is not None else AllocationOptions(), progress, travel)

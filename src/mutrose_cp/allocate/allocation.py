@@ -34,6 +34,7 @@ from .warmstart import add_hint, warm_start
 
 if TYPE_CHECKING:
     from ..mission import Mission
+    from .travel import TravelTimes
 
 LOAD_SHARE = 0.1  # of the time limit, at most, for the load relaxation
 LP_SHARE = 0.25  # for the LP
@@ -91,16 +92,17 @@ class Allocation:
 
 
 def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = AllocationOptions(),
-             progress: Callable[[Progress], None] | None = None) -> Allocation:
+             progress: Callable[[Progress], None] | None = None, travel: TravelTimes | None = None) -> Allocation:
     """Choose a valid mission decomposition, the robots of each task and the times together
-    (see the package docstring).  Raises :class:`~.problem.NoAllocationError` (exit 3) when the
-    fleet cannot execute any valid decomposition, and
-    :class:`~mutrose_cp.solve.run.IncompleteSolveError` (exit 4) when the time limit passes
-    before any schedule is found."""
+    (see the package docstring).  ``travel``: the fleet's :func:`~.problem.mission_travel`, when
+    the caller has built it to check the fleet (built here otherwise).  Raises
+    :class:`~.problem.NoAllocationError` (exit 3) when the fleet cannot execute any valid
+    decomposition, and :class:`~mutrose_cp.solve.run.IncompleteSolveError` (exit 4) when the
+    time limit passes before any schedule is found."""
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
     budget = options.time_limit
-    problem = build_problem(mission.decomposition_model(), fleet)
+    problem = build_problem(mission.decomposition_model(), fleet, travel)
     load = None
     if options.lp_bound or options.warm_start:
         load = load_bound(problem, options.objective, LOAD_SHARE * budget, options.workers, options.seed)

@@ -74,6 +74,14 @@ def task_places(mission: Mission, fleet: Fleet) -> set[str]:
     return {p for p in tasks if p} | {r.start for r in fleet.robots if r.start}
 
 
+def mission_travel(mission: Mission, fleet: Fleet) -> TravelTimes:
+    """The travel times between the places of every task of the mission and the robots' starts.
+    Raises :class:`MissionError` naming each place a time is missing for, also where only a
+    decomposition no valid mission decomposition uses is: the fleet is checked against the
+    whole mission (``check --fleet``), and an allocation takes its times from this one table."""
+    return build_travel(mission, fleet, task_places(mission, fleet))
+
+
 def possible_decompositions(dm: DecompositionModel) -> set[str]:
     """The decompositions CP-SAT's presolve does not rule out on the decomposition model alone
     (a method whose precondition the world falsifies, say).  Leaving the others out keeps them
@@ -103,9 +111,10 @@ def possible_decompositions(dm: DecompositionModel) -> set[str]:
     return {d for d, literal in dm.decomposition.items() if can_be_true(literal)}
 
 
-def build_problem(dm: DecompositionModel, fleet: Fleet) -> AllocationProblem:
+def build_problem(dm: DecompositionModel, fleet: Fleet, travel: TravelTimes | None = None) -> AllocationProblem:
     """The jobs of every decomposition that can be chosen, with their candidate robots and the
-    travel times between their places and the robots' starts."""
+    travel times between their places and the robots' starts.  ``travel`` is the table of
+    :func:`mission_travel` when the caller has built it already (checking the fleet)."""
     durations = fleet.durations
     instances = {v.decomposition.id: v.decomposition.instance
                  for v in dm.mission.task_graph.decompositions() if v.decomposition is not None}
@@ -119,7 +128,7 @@ def build_problem(dm: DecompositionModel, fleet: Fleet) -> AllocationProblem:
         jobs[d] = Job(d, info.task, info.task_name, info.actions, duration, place_of(instances[d].location),
                       info.robot_number, info.capabilities, candidates)
     places = {j.location for j in jobs.values() if j.location} | {r.start for r in fleet.robots if r.start}
-    travel = build_travel(dm.mission, fleet, places)
+    travel = (travel if travel is not None else mission_travel(dm.mission, fleet)).among(places)
     precedences = tuple((c.first, c.second) for c in dm.constraints
                         if c.kind in ("SEQ", "FB") and c.first in jobs and c.second in jobs)
     same = tuple((c.first, c.second) for c in dm.constraints

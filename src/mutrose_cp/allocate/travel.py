@@ -104,6 +104,14 @@ class TravelTimes:
         distance = self.base[self._position[a]][self._position[b]]
         return math.ceil(distance / robot.speed - 1e-9)
 
+    def among(self, places: Iterable[str]) -> TravelTimes:
+        """The times between ``places`` alone (a subset of :attr:`places`): the table of the
+        mission's places, checked once, serves an allocation that needs only some of them."""
+        kept = sorted(set(places))
+        rows = [self.base[self._position[p]] for p in kept]
+        return TravelTimes(tuple(kept), tuple(tuple(row[self._position[p]] for p in kept) for row in rows),
+                           self.modelled)
+
     @cached_property
     def _position(self) -> dict[str, int]:
         return {p: i for i, p in enumerate(self.places)}

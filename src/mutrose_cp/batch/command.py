@@ -16,6 +16,8 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ..option_types import count_option, seconds
+
 if TYPE_CHECKING:  # the command line builds this parser for every command: the rest loads when batch runs
     from .job import Outcome
     from .manifest import Job
@@ -23,19 +25,6 @@ if TYPE_CHECKING:  # the command line builds this parser for every command: the 
 
 BATCH_USAGE = ("mutrose-cp batch [options] MANIFEST\n"
                "       mutrose-cp batch [options] --each GLOB [--mission DIR] [--output PATTERN] COMMAND [OPTION ...]")
-
-
-def _positive(kind: type):
-    def parse(text: str) -> float | int:
-        try:
-            value = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a {'whole ' if kind is int else ''}number, got {text!r}") \
-                from None
-        if not value > 0:
-            raise argparse.ArgumentTypeError(f"{text}: give a number above 0")
-        return value
-    return parse
 
 
 def default_workers() -> int:
@@ -47,15 +36,15 @@ def default_workers() -> int:
 
 
 def _batch_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--jobs", "-j", type=_positive(int), default=default_workers(), metavar="N",
+    p.add_argument("--jobs", "-j", type=count_option(1), default=default_workers(), metavar="N",
                    help="run N jobs at a time (default: the number of cores); with --ray, the CPUs of the local "
                         "cluster it starts")
     p.add_argument("--ray", nargs="?", const="", metavar="ADDRESS",
                    help="run the jobs on Ray: alone, on a local cluster started for the batch; 'auto' or HOST:PORT "
                         "joins a running cluster (needs pip install 'mutrose-cp[ray]')")
-    p.add_argument("--time-limit", type=_positive(float), metavar="S",
+    p.add_argument("--time-limit", type=seconds, metavar="S",
                    help="stop a job after S seconds (status timeout; default: no limit)")
-    p.add_argument("--memory-mb", type=_positive(int), metavar="MB",
+    p.add_argument("--memory-mb", type=count_option(1), metavar="MB",
                    help="stop a job that needs more than MB megabytes (status memory; default: no limit)")
     p.add_argument("--results", metavar="FILE",
                    help="the results file (JSONL; default: MANIFEST with the suffix .results.jsonl, or "

@@ -1,0 +1,41 @@
+"""The argparse types of the command line's numeric options, shared by every sub-command.
+
+A value out of its domain is a usage error (argparse prints ``argument --X: ...`` and exits
+with 2) before any work, never a traceback nor a value silently taken as something else: ``inf``
+or ``nan`` seconds, a negative count.  ``batch`` registers its options with these types too, so
+``batch --time-limit`` accepts what ``allocate --time-limit`` accepts.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Callable
+
+MAX_COUNT = 2**62  # beyond any listing that fits on a disk; CP-SAT's limits are 64-bit
+MAX_SECONDS = 10**7  # about 115 days: any longer limit is a typo
+
+
+def count_option(minimum: int, maximum: int = MAX_COUNT) -> Callable[[str], int]:
+    """An argparse type: an integer from ``minimum`` to ``maximum``."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(f"{text} is out of range: give a number from {minimum} to {maximum}")
+        return value
+    return parse
+
+
+def seconds(text: str) -> float:
+    """An argparse type: a finite positive number of seconds, at most ``MAX_SECONDS``."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
+    if value > MAX_SECONDS:
+        raise argparse.ArgumentTypeError(f"{text} is out of range: give at most {MAX_SECONDS} seconds")
+    return value
