@@ -53,7 +53,9 @@ class Evaluated:
 
 
 class _Evaluator:
-    """Earliest start times of fixed robot sequences (see :func:`evaluate`)."""
+    """Earliest start times of fixed robot sequences (see :func:`evaluate`).  The descent spends
+    nearly all its time here, so what does not depend on the sequences is looked up once: each
+    job's predecessors, successors, place and duration, and the trips already met."""
 
     def __init__(self, problem: AllocationProblem, chosen: Sequence[str], objective: Objective) -> None:
         self.problem = problem
@@ -63,26 +65,17 @@ class _Evaluator:
         self.chosen = list(chosen)
         self.count = 0
         self.trips: dict[tuple[str, str | None, str | None], int] = {}
-        self.after: dict[str, list[str]] = {}
+        self.after: dict[str, list[str]] = {j: [] for j in self.chosen}
         for j in self.chosen:
             for i in self.before[j]:
-                self.after.setdefault(i, []).append(j)
+                self.after[i].append(j)
+        self.location = {j: problem.jobs[j].location for j in self.chosen}
+        self.duration = {j: problem.jobs[j].duration for j in self.chosen}
 
     def __call__(self, sequences: Mapping[str, Sequence[str]]) -> Evaluated | None:
         """The schedule, or None when the sequences contradict the precedences (a cycle)."""
         self.count += 1
-        jobs = self.problem.jobs
-        waiting = {j: len(self.before[j]) for j in self.chosen}
-        previous: dict[str, list[tuple[str, str | None]]] = {}  # job -> (robot, the robot's job before)
-        for robot, sequence in sequences.items():
-            for i, j in enumerate(sequence):
-                previous.setdefault(j, []).append((robot, sequence[i - 1] if i else None))
-                waiting[j] += 1 if i else 0
-        after = self.after
-        nxt: dict[str, list[str]] = {}
-        for sequence in sequences.values():
-            for a, b in zip(sequence, sequence[1:]):
-                nxt.setdefault(a, []).append(b)
+        previous, nxt, waiting = self._links(sequences)
         place: dict[tuple[str, str], str | None] = {}  # (job, robot) -> the robot's place after the job
         start: dict[str, int] = {}
         end: dict[str, int] = {}
@@ -90,15 +83,18 @@ class _Evaluator:
         travel = 0
         while ready:
             j = ready.pop()
-            at = max((end[i] for i in self.before[j]), default=0)
+            at = 0
+            for i in self.before[j]:
+                at = end[i] if end[i] > at else at
+            location = self.location[j]
             for robot, p in previous.get(j, ()):
                 origin = place[(p, robot)] if p is not None else self.robots[robot].start
-                trip = self.trip(robot, origin, jobs[j].location)
+                trip = self.trip(robot, origin, location)
                 travel += trip
                 at = max(at, (end[p] if p is not None else 0) + trip)
-                place[(j, robot)] = jobs[j].location or origin
-            start[j], end[j] = at, at + jobs[j].duration
-            for k in after.get(j, []) + nxt.get(j, []):
+                place[(j, robot)] = location or origin
+            start[j], end[j] = at, at + self.duration[j]
+            for k in self.after[j] + nxt.get(j, []):
                 waiting[k] -= 1
                 if not waiting[k]:
                     ready.append(k)
@@ -108,6 +104,22 @@ class _Evaluator:
         makespan = max(end.values(), default=0)
         return Evaluated(start, (self.objective.value(makespan, travel), sum(finish)))
 
+    def _links(self, sequences: Mapping[str, Sequence[str]]
+               ) -> tuple[dict[str, list[tuple[str, str | None]]], dict[str, list[str]], dict[str, int]]:
+        """For each job, its robots with the job each does before it, the jobs its robots do
+        next, and how many of its predecessors and robots' previous jobs it waits for."""
+        waiting = {j: len(self.before[j]) for j in self.chosen}
+        previous: dict[str, list[tuple[str, str | None]]] = {}
+        nxt: dict[str, list[str]] = {}
+        for robot, sequence in sequences.items():
+            p = None
+            for j in sequence:
+                previous.setdefault(j, []).append((robot, p))
+                if p is not None:
+                    waiting[j] += 1
+                    nxt.setdefault(p, []).append(j)
+                p = j
+        return previous, nxt, waiting
 
     def trip(self, robot: str, a: str | None, b: str | None) -> int:
         key = (robot, a, b)
