@@ -6,9 +6,14 @@ descent fixes both, before the schedule is handed to CP-SAT as its hint:
 
 * a *unit* is a chosen job and the jobs that must share its robot (execution constraints), done
   by one robot; units done by a team stay where they are;
-* a move takes a unit off a robot (the one that finishes last first) and inserts each of its jobs, in order,
-  where it adds the least travel to another able robot's sequence (*relocate*), or to its own
-  (*reorder*);
+* the moves start from the robots that finish last, the cheapest kind first (:data:`MOVES`):
+  a *relocation* takes a unit off a robot and inserts each of its jobs, in order, where it
+  adds the least travel to another able robot's sequence, or to its own; a *segment move*
+  (or-opt) puts up to ``SEGMENT`` consecutive jobs of a robot elsewhere in its own sequence; a
+  *reversal* (2-opt) does a stretch of a robot's sequence backwards; a *swap* exchanges a unit
+  of a robot with a unit of another, when each robot can do the other's unit.  The last three
+  are evaluated only when they do not lengthen the robot's own work (its jobs and trips),
+  since evaluations are what the descent spends;
 * every move is evaluated exactly (:func:`evaluate`: each job as early as its predecessors and
   its robots' sequences allow, the trips at each robot's speed) and kept when it lowers the
   objective, or keeps it and lowers the sum of the robots' finishing times, which spreads the
@@ -25,7 +30,7 @@ from __future__ import annotations
 import random
 import time
 from dataclasses import dataclass
-from typing import Callable, Mapping, Sequence
+from typing import Callable, Iterator, Mapping, Sequence
 
 from .options import Objective
 from .problem import AllocationProblem
@@ -34,6 +39,7 @@ from .schedule import chosen_predecessors
 MAX_EVALUATIONS = 40_000  # schedules evaluated, at most
 KICK = 3  # units moved at random to leave a local optimum
 STALL = 200  # kicks without a better schedule, at most
+SEGMENT = 3  # jobs moved together within a robot's sequence, at most
 
 Sequences = dict[str, list[str]]  # robot -> its jobs in the order it does them
 
@@ -47,7 +53,9 @@ class Evaluated:
 
 
 class _Evaluator:
-    """Earliest start times of fixed robot sequences (see :func:`evaluate`)."""
+    """Earliest start times of fixed robot sequences (see :func:`evaluate`).  The descent spends
+    nearly all its time here, so what does not depend on the sequences is looked up once: each
+    job's predecessors, successors, place and duration, and the trips already met."""
 
     def __init__(self, problem: AllocationProblem, chosen: Sequence[str], objective: Objective) -> None:
         self.problem = problem
@@ -57,26 +65,17 @@ class _Evaluator:
         self.chosen = list(chosen)
         self.count = 0
         self.trips: dict[tuple[str, str | None, str | None], int] = {}
-        self.after: dict[str, list[str]] = {}
+        self.after: dict[str, list[str]] = {j: [] for j in self.chosen}
         for j in self.chosen:
             for i in self.before[j]:
-                self.after.setdefault(i, []).append(j)
+                self.after[i].append(j)
+        self.location = {j: problem.jobs[j].location for j in self.chosen}
+        self.duration = {j: problem.jobs[j].duration for j in self.chosen}
 
     def __call__(self, sequences: Mapping[str, Sequence[str]]) -> Evaluated | None:
         """The schedule, or None when the sequences contradict the precedences (a cycle)."""
         self.count += 1
-        jobs = self.problem.jobs
-        waiting = {j: len(self.before[j]) for j in self.chosen}
-        previous: dict[str, list[tuple[str, str | None]]] = {}  # job -> (robot, the robot's job before)
-        for robot, sequence in sequences.items():
-            for i, j in enumerate(sequence):
-                previous.setdefault(j, []).append((robot, sequence[i - 1] if i else None))
-                waiting[j] += 1 if i else 0
-        after = self.after
-        nxt: dict[str, list[str]] = {}
-        for sequence in sequences.values():
-            for a, b in zip(sequence, sequence[1:]):
-                nxt.setdefault(a, []).append(b)
+        previous, nxt, waiting = self._links(sequences)
         place: dict[tuple[str, str], str | None] = {}  # (job, robot) -> the robot's place after the job
         start: dict[str, int] = {}
         end: dict[str, int] = {}
@@ -84,15 +83,18 @@ class _Evaluator:
         travel = 0
         while ready:
             j = ready.pop()
-            at = max((end[i] for i in self.before[j]), default=0)
+            at = 0
+            for i in self.before[j]:
+                at = end[i] if end[i] > at else at
+            location = self.location[j]
             for robot, p in previous.get(j, ()):
                 origin = place[(p, robot)] if p is not None else self.robots[robot].start
-                trip = self.trip(robot, origin, jobs[j].location)
+                trip = self.trip(robot, origin, location)
                 travel += trip
                 at = max(at, (end[p] if p is not None else 0) + trip)
-                place[(j, robot)] = jobs[j].location or origin
-            start[j], end[j] = at, at + jobs[j].duration
-            for k in after.get(j, []) + nxt.get(j, []):
+                place[(j, robot)] = location or origin
+            start[j], end[j] = at, at + self.duration[j]
+            for k in self.after[j] + nxt.get(j, []):
                 waiting[k] -= 1
                 if not waiting[k]:
                     ready.append(k)
@@ -102,6 +104,22 @@ class _Evaluator:
         makespan = max(end.values(), default=0)
         return Evaluated(start, (self.objective.value(makespan, travel), sum(finish)))
 
+    def _links(self, sequences: Mapping[str, Sequence[str]]
+               ) -> tuple[dict[str, list[tuple[str, str | None]]], dict[str, list[str]], dict[str, int]]:
+        """For each job, its robots with the job each does before it, the jobs its robots do
+        next, and how many of its predecessors and robots' previous jobs it waits for."""
+        waiting = {j: len(self.before[j]) for j in self.chosen}
+        previous: dict[str, list[tuple[str, str | None]]] = {}
+        nxt: dict[str, list[str]] = {}
+        for robot, sequence in sequences.items():
+            p = None
+            for j in sequence:
+                previous.setdefault(j, []).append((robot, p))
+                if p is not None:
+                    waiting[j] += 1
+                    nxt.setdefault(p, []).append(j)
+                p = j
+        return previous, nxt, waiting
 
     def trip(self, robot: str, a: str | None, b: str | None) -> int:
         key = (robot, a, b)
@@ -196,24 +214,114 @@ def _units(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str
 
 def _better_move(problem: AllocationProblem, evaluator: _Evaluator, sequences: Sequences, units: list[list[str]],
                  best: Evaluated) -> tuple[Sequences, Evaluated] | None:
-    """The first move that scores better than ``best``, off the robots that finish last first."""
+    """The first move that scores better than ``best``: each kind of :data:`MOVES` in turn, off
+    the robots that finish last first."""
     end = {j: best.start[j] + problem.jobs[j].duration for j in best.start}
     order = sorted((r for r in sequences if sequences[r]), key=lambda r: (-end[sequences[r][-1]], r))
-    for robot in order:
-        mine = [u for u in units if u[0] in sequences[robot]]
-        mine.sort(key=lambda u: -sum(problem.jobs[j].duration for j in u))
-        for unit in mine:
-            unit = sorted(unit, key=lambda j: (best.start[j], j))
-            for target in sorted(sequences, key=lambda r: (r != robot, end[sequences[r][-1]] if sequences[r] else 0, r)):
-                if not all(target in problem.jobs[j].candidates for j in unit):
-                    continue
-                moved = _relocate(problem, sequences, unit, robot, target)
+    around = _Around(problem, sequences, units, best, end, evaluator.trip)
+    for move in MOVES:
+        for robot in order:
+            for moved in move(around, robot):
                 result = evaluator(moved)
                 if result is not None and result.score < best.score:
                     return moved, result
                 if evaluator.count >= MAX_EVALUATIONS:
                     return None
     return None
+
+
+@dataclass(frozen=True)
+class _Around:
+    """A schedule the moves start from: its sequences, units and end times."""
+
+    problem: AllocationProblem
+    sequences: Sequences
+    units: list[list[str]]
+    best: Evaluated
+    end: dict[str, int]
+    trip: Callable[[str, str | None, str | None], int]  # (robot, from, to) -> seconds
+
+    def units_of(self, robot: str) -> list[list[str]]:
+        """``robot``'s units, the longest first, each in the order of its start times."""
+        mine = [u for u in self.units if u[0] in self.sequences[robot]]
+        mine.sort(key=lambda u: -sum(self.problem.jobs[j].duration for j in u))
+        return [sorted(u, key=lambda j: (self.best.start[j], j)) for u in mine]
+
+    def able(self, robot: str, unit: list[str]) -> bool:
+        return all(robot in self.problem.jobs[j].candidates for j in unit)
+
+    def finish(self, robot: str) -> int:
+        return self.end[self.sequences[robot][-1]] if self.sequences[robot] else 0
+
+    def work(self, robot: str, sequence: Sequence[str]) -> int:
+        """What ``robot`` spends on ``sequence`` without waiting: its jobs and its trips."""
+        jobs = self.problem.jobs
+        here = next(r.start for r in self.problem.fleet.robots if r.name == robot)
+        total = 0
+        for j in sequence:
+            total += jobs[j].duration + self.trip(robot, here, jobs[j].location)
+            here = jobs[j].location or here
+        return total
+
+    def no_longer(self, robot: str, sequence: Sequence[str]) -> bool:
+        """Whether ``robot`` spends no more on ``sequence`` than on its sequence now: the moves
+        beyond relocation are evaluated only then, as the evaluations are what the search spends."""
+        return self.work(robot, sequence) <= self.work(robot, self.sequences[robot])
+
+
+def _relocations(around: _Around, robot: str) -> Iterator[Sequences]:
+    """Each unit of ``robot`` to its own sequence again (reinserted) or to another able robot's,
+    the robots that finish first first."""
+    targets = sorted(around.sequences, key=lambda r: (r != robot, around.finish(r), r))
+    for unit in around.units_of(robot):
+        for target in targets:
+            if around.able(target, unit):
+                yield _relocate(around.problem, around.sequences, unit, robot, target)
+
+
+def _swaps(around: _Around, robot: str) -> Iterator[Sequences]:
+    """Each unit of ``robot`` exchanged with a unit of another robot when each robot can do
+    the other's: what a relocation cannot do when every other robot is as busy."""
+    others = sorted((r for r in around.sequences if r != robot), key=lambda r: (around.finish(r), r))
+    for unit in around.units_of(robot):
+        for other in others:
+            if not around.able(other, unit):
+                continue
+            for theirs in around.units_of(other):
+                if around.able(robot, theirs):
+                    there = _relocate(around.problem, around.sequences, unit, robot, other)
+                    swapped = _relocate(around.problem, there, theirs, other, robot)
+                    if around.no_longer(robot, swapped[robot]):
+                        yield swapped
+
+
+def _segment_moves(around: _Around, robot: str) -> Iterator[Sequences]:
+    """Or-opt on ``robot``'s own sequence: up to ``SEGMENT`` consecutive jobs moved, in order,
+    to every other position of it (the exact evaluation judges the waits as well as the
+    trips, which a least-travel insertion does not)."""
+    sequence = around.sequences[robot]
+    for length in range(1, SEGMENT + 1):
+        for i in range(len(sequence) - length + 1):
+            rest = sequence[:i] + sequence[i + length:]
+            for at in range(len(rest) + 1):
+                moved = rest[:at] + sequence[i:i + length] + rest[at:]
+                if at != i and around.no_longer(robot, moved):
+                    yield {**around.sequences, robot: moved}
+
+
+def _reversals(around: _Around, robot: str) -> Iterator[Sequences]:
+    """2-opt on ``robot``'s own sequence: each stretch of it done backwards, which uncrosses
+    its route (the evaluator rejects a reversal against a precedence)."""
+    sequence = around.sequences[robot]
+    for i in range(len(sequence) - 1):
+        for k in range(i + 2, len(sequence) + 1):
+            reversed_ = sequence[:i] + sequence[i:k][::-1] + sequence[k:]
+            if around.no_longer(robot, reversed_):
+                yield {**around.sequences, robot: reversed_}
+
+
+Move = Callable[[_Around, str], Iterator[Sequences]]
+MOVES: tuple[Move, ...] = (_relocations, _segment_moves, _reversals, _swaps)  # cheapest first
 
 
 def _relocate(problem: AllocationProblem, sequences: Sequences, unit: list[str], source: str, target: str) -> Sequences:
