@@ -151,3 +151,18 @@ def test_group_false_tasks_need_exactly_one_robot(tmp_path: Path, robots, ok):
     else:
         with pytest.raises(MissionError, match=r"Non group task \[AT1_1\] does not have 1 robot"):
             _ = mission.task_graph
+
+
+def test_the_finished_graph_knows_its_execution_constraint_edges_both_ways(reference):
+    """The finished Task Graph drops the builder's set of EC pairs (its largest index on large
+    missions) and answers from the partner lists: the same answers, both directions."""
+    from mutrose_cp.mission import find_mission_files
+
+    tg = Mission.load(*find_mission_files(reference / "missions" / "vital-signs-monitoring")).task_graph
+    tasks = [t.index for t in tg.tasks()]
+    linked = {(t, p.task) for t in tasks for p in tg.ec_partners(t)}
+    assert linked and not tg._edges.ec_pairs
+    for a in tasks:
+        for b in tasks:
+            assert tg.has_edge(a, b) == ((a, b) in linked or (a, b) in tg._edges.kind), (a, b)
+    assert all((b, a) in linked for a, b in linked)

@@ -189,7 +189,11 @@ class _Adjacency:
         return any(k is kind for k in self._edges.kind.values())
 
     def has_edge(self, a: int, b: int) -> bool:
-        return (a, b) in self._edges.kind or _pair(a, b) in self._edges.ec_pairs
+        if (a, b) in self._edges.kind:
+            return True
+        if self._edges.ec_pairs:  # while building: every EC pair is kept as an int
+            return _pair(a, b) in self._edges.ec_pairs
+        return any(p.task == b for p in self._edges.ec.get(a, ()))  # frozen: the partner list
 
     def ec_partners(self, v: int) -> list[ExecutionPartner]:
         """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
@@ -319,5 +323,9 @@ class TaskGraphBuilder(_Adjacency):
                 pairs.add(v << 32 | t)
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
+        """The finished graph.  The set of EC pairs, which only spares the construction rules a
+        look through partner lists, is dropped: on large missions it is the graph's largest
+        index (two ints per execution-constrained task pair)."""
+        self._edges.ec_pairs = set()
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})
