@@ -18,7 +18,7 @@ from mutrose_cp.allocate.improve import evaluate, improve
 from mutrose_cp.allocate.load import load_bound
 from mutrose_cp.allocate.output import write_decomposition, write_schedule
 from mutrose_cp.allocate.problem import build_problem
-from mutrose_cp.allocate.schedule import compact
+from mutrose_cp.allocate.schedule import compact, robot_sequences, robot_teams
 from mutrose_cp.allocate.warmstart import greedy_plan, least_work_decomposition, warm_start
 from mutrose_cp.api import Mission, find_mission_files
 from mutrose_cp.cli import main
@@ -124,12 +124,27 @@ def test_the_warm_start_passes_the_checker(tmp_path):
         check_allocation(mission, fleet_path, schedule_path, output_path)
 
 
+def _generated(tmp_path, deliveries: int, robots: int):
+    """A generated mission, its fleet file and its allocation problem."""
+    mission_dir, fleet_path = generate(deliveries, robots, tmp_path)
+    mission = Mission.load(*find_mission_files(mission_dir))
+    return mission, fleet_path, build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
+
+
+def _listed(tmp_path, deliveries: int, robots: int):
+    """A generated mission and fleet, its allocation problem, the load relaxation's balanced
+    decomposition and its list schedule."""
+    mission, fleet_path, problem = _generated(tmp_path, deliveries, robots)
+    chosen = load_bound(problem, Objective(), 10.0).decompositions[-1]
+    plan = greedy_plan(problem, chosen)
+    assert plan is not None
+    return mission, fleet_path, problem, chosen, plan
+
+
 def test_the_warm_start_spreads_the_deliveries(tmp_path):
     """Twelve deliveries for six robots: the list schedule of the balanced decomposition ends
     well before the one of the least-work decomposition, which needs the two all-rounders."""
-    mission_dir, fleet_path = generate(12, 6, tmp_path)
-    mission = Mission.load(*find_mission_files(mission_dir))
-    problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
+    mission, fleet_path, problem = _generated(tmp_path, 12, 6)
     balanced = load_bound(problem, Objective(), 10.0).decompositions[-1]
     least = least_work_decomposition(problem)
     assert least is not None
@@ -171,28 +186,19 @@ def test_local_moves_shorten_the_list_schedule(tmp_path):
     """Twelve deliveries for six robots: moving deliveries off the robot that finishes last
     ends well before the list schedule, the schedule passes the checker, and the same seed gives
     the same schedule (the search stops on its own budget, not on the clock)."""
-    mission_dir, fleet_path = generate(12, 6, tmp_path)
-    mission = Mission.load(*find_mission_files(mission_dir))
-    problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
-    chosen = load_bound(problem, Objective(), 10.0).decompositions[-1]
-    plan = greedy_plan(problem, chosen)
-    assert plan is not None
+    mission, fleet_path, problem, chosen, plan = _listed(tmp_path, 12, 6)
     listed = max(plan[1][j] + problem.jobs[j].duration for j in chosen)
     teams, start, value = improve(problem, chosen, *plan, Objective(), 600.0)
     assert value == max(start[j] + problem.jobs[j].duration for j in chosen) < 0.9 * listed
     _check_plan(tmp_path, mission, fleet_path, problem, chosen, teams, start, "improved")
-    sequences = {r.name: sorted((j for j in chosen if r.name in teams[j]), key=lambda j: (start[j], j))
-                 for r in problem.fleet.robots}
-    evaluated = evaluate(problem, chosen, sequences)
+    evaluated = evaluate(problem, chosen, robot_sequences(problem, chosen, teams, start))
     assert evaluated is not None and evaluated.start == start
     assert improve(problem, chosen, *plan, Objective(), 600.0) == (teams, start, value)
 
 
 def test_orders_against_the_precedences_are_no_schedule(tmp_path):
     """A robot that hands an item over before fetching it: the evaluator finds the cycle."""
-    mission_dir, fleet_path = generate(2, 3, tmp_path)
-    mission = Mission.load(*find_mission_files(mission_dir))
-    problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
+    mission, fleet_path, problem = _generated(tmp_path, 2, 3)
     first, second = problem.same_robots[0]
     chosen = [first, second]
     robot = next(r for r in problem.jobs[first].candidates if r in problem.jobs[second].candidates)
@@ -208,8 +214,7 @@ def _units_backwards(problem, chosen, teams, start) -> tuple[dict, dict]:
     reordering should shorten."""
     from mutrose_cp.allocate.improve import _units
 
-    sequences = {r.name: sorted((j for j in chosen if r.name in teams[j]), key=lambda j: (start[j], j))
-                 for r in problem.fleet.robots}
+    sequences = robot_sequences(problem, chosen, teams, start)
     last = max((r for r in sequences if sequences[r]),
                key=lambda r: start[sequences[r][-1]] + problem.jobs[sequences[r][-1]].duration)
     unit = {j: n for n, u in enumerate(_units(problem, chosen, teams)) for j in u}
@@ -217,7 +222,7 @@ def _units_backwards(problem, chosen, teams, start) -> tuple[dict, dict]:
     sequences[last] = [j for u in reversed(order) for j in sequences[last] if unit[j] == u]
     evaluated = evaluate(problem, chosen, sequences)
     assert evaluated is not None
-    return {j: tuple(r for r in sequences if j in sequences[r]) for j in chosen}, evaluated.start
+    return robot_teams(sequences, chosen), evaluated.start
 
 
 @pytest.mark.parametrize("move", ["_segment_moves", "_reversals", "_swaps"])
@@ -228,12 +233,7 @@ def test_each_move_shortens_a_schedule_alone(tmp_path, monkeypatch, move):
     simply move); the result passes the checker and is the same on every run."""
     from mutrose_cp.allocate import improve as local
 
-    mission_dir, fleet_path = generate(10, 4, tmp_path)
-    mission = Mission.load(*find_mission_files(mission_dir))
-    problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
-    chosen = load_bound(problem, Objective(), 10.0).decompositions[-1]
-    plan = greedy_plan(problem, chosen)
-    assert plan is not None
+    mission, fleet_path, problem, chosen, plan = _listed(tmp_path, 10, 4)
     monkeypatch.setattr(local, "STALL", 1)  # one descent
     monkeypatch.setattr(local, "KICK", 0)
     monkeypatch.setattr(local, "MOVES", (local._relocations,))

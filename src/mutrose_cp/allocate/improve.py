@@ -34,7 +34,7 @@ from typing import Callable, Iterator, Mapping, Sequence
 
 from .options import Objective
 from .problem import AllocationProblem
-from .schedule import chosen_predecessors
+from .schedule import chosen_predecessors, robot_sequences, robot_teams
 
 MAX_EVALUATIONS = 40_000  # schedules evaluated, at most
 KICK = 3  # units moved at random to leave a local optimum
@@ -145,8 +145,7 @@ def improve(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[st
     and objective of the best schedule found."""
     deadline = time.perf_counter() + time_limit
     evaluator = _Evaluator(problem, chosen, objective)
-    sequences = {r.name: sorted((j for j in chosen if r.name in teams[j]), key=lambda j: (start[j], j))
-                 for r in problem.fleet.robots}
+    sequences = robot_sequences(problem, chosen, teams, start)
     first = evaluator(sequences)
     if first is None:  # the start times contradict the precedences: not a schedule to improve
         return dict(teams), dict(start), float("inf")
@@ -167,8 +166,7 @@ def improve(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[st
         trial, result = _descend(problem, evaluator, kicked, moved, units, left)
         if result.score < best.score:
             sequences, best, stall = trial, result, 0
-    teams_out = {j: tuple(r for r in sequences if j in sequences[r]) for j in chosen}
-    return teams_out, best.start, best.score[0]
+    return robot_teams(sequences, chosen), best.start, best.score[0]
 
 
 def _descend(problem: AllocationProblem, evaluator: _Evaluator, sequences: Sequences, best: Evaluated,

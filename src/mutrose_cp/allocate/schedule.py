@@ -75,6 +75,18 @@ def compact(problem: AllocationProblem, jobs: Sequence[str], teams: Mapping[str,
                     _routes(problem, order, teams, early_start, early_end, robots))
 
 
+def robot_sequences(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str, tuple[str, ...]],
+                    start: Mapping[str, int]) -> dict[str, list[str]]:
+    """Each robot's jobs of ``chosen`` in the order it starts them (ties by job id)."""
+    return {r.name: sorted((j for j in chosen if r.name in teams[j]), key=lambda j: (start[j], j))
+            for r in problem.fleet.robots}
+
+
+def robot_teams(sequences: Mapping[str, Sequence[str]], chosen: Sequence[str]) -> dict[str, tuple[str, ...]]:
+    """The robots of each job of ``chosen``, from each robot's sequence of jobs."""
+    return {j: tuple(r for r in sequences if j in sequences[r]) for j in chosen}
+
+
 def chosen_predecessors(problem: AllocationProblem, chosen: set[str]) -> dict[str, list[str]]:
     """For each chosen job, the chosen jobs it must follow, also through jobs that are not
     chosen (those take no time and pass precedences on)."""

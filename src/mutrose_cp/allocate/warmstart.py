@@ -31,7 +31,7 @@ from .improve import improve
 from .model import START, AllocationModel
 from .options import Objective
 from .problem import AllocationProblem
-from .schedule import chosen_predecessors
+from .schedule import chosen_predecessors, robot_sequences
 
 Plan = tuple[dict[str, tuple[str, ...]], dict[str, int]]  # teams and start times of the chosen jobs
 
@@ -230,9 +230,8 @@ def add_hint(am: AllocationModel, warm: WarmStart) -> None:
 
 
 def _routes(problem: AllocationProblem, warm: WarmStart) -> dict[str, list[str]]:
-    return {r.name: [j for j in sorted((j for j in warm.chosen if r.name in warm.teams[j]),
-                                       key=lambda j: (warm.start[j], j)) if problem.jobs[j].location is not None]
-            for r in problem.fleet.robots}
+    return {r: [j for j in jobs if problem.jobs[j].location is not None]
+            for r, jobs in robot_sequences(problem, warm.chosen, warm.teams, warm.start).items()}
 
 
 def _all_starts(problem: AllocationProblem, warm: WarmStart) -> dict[str, int]:
