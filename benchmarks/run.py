@@ -86,9 +86,8 @@ def measure(cmd: list[str], cwd: Path, timeout: float) -> dict:
         return {"status": "timeout", "seconds": round(run.seconds, 3), "peak_mb": round(run.peak_mb, 1)}
     result = {"status": "ok" if run.succeeded else f"exit {run.exit_status}",
               "seconds": round(run.seconds, 3), "peak_mb": round(run.peak_mb, 1)}
-    lines = [l for l in run.stdout.splitlines() if l.startswith("{")]
-    if lines:
-        summary = json.loads(lines[-1])
+    summary = run.summary
+    if summary is not None:
         result.update(task_instances=summary.get("task_instances"), constraints=summary.get("constraints"),
                       mission_decompositions=summary.get("mission_decompositions"))
     elif not run.succeeded:

@@ -60,3 +60,16 @@ def test_cancel_kills_the_group_and_measures_nothing(tmp_path):
     with pytest.raises(Cancelled):
         run_measured(command, tmp_path, 60, cancel=cancel)
     assert not _group_alive(int(out.read_text()))
+
+
+def test_what_a_run_printed_is_read_once_for_every_caller():
+    """The summary is the last stdout line that is a JSON object (a stray "{" line is skipped, not
+    a crash); the error lines lose their prefix; an unknown signal still reads as one."""
+    from mutrose_cp.measure import Measurement
+
+    run = Measurement(-999, 1.0, 10.0, '{"count": "3"}\n{not json\n[1]\n', "note\nerror: bad goal\nerror: bad task\n")
+    assert run.summary == {"count": "3"}
+    assert run.errors == ["bad goal", "bad task"]
+    assert run.ending == "killed by signal 999"
+    assert Measurement(-9, 1.0, 10.0, "", "").ending == "killed by SIGKILL"
+    assert Measurement(3, 1.0, 10.0, "", "").ending == "exit status 3" and Measurement(3, 1.0, 10.0, "", "").summary is None

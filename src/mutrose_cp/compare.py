@@ -12,9 +12,7 @@ than ``limit`` mission decompositions is not listed: then only the counts are co
 """
 from __future__ import annotations
 
-import json
 import shutil
-import signal
 import sys
 import tempfile
 from dataclasses import dataclass, field
@@ -112,10 +110,7 @@ def _failure(measured: Measurement) -> str:
         lines = [line.strip() for line in text.splitlines() if line.strip()]
         if lines:
             return lines[-1].removeprefix("error: ")
-    status = measured.exit_status
-    if status is not None and status < 0:
-        return f"killed by {signal.Signals(-status).name}"
-    return f"exit status {status}"
+    return measured.ending
 
 
 def _measured_run(decomposer: str, measured: Measurement, *, count: int | None = None,
@@ -131,8 +126,7 @@ def _within(request: CompareRequest, count: int) -> bool:
 
 def _input_error(decomposer: str, measured: Measurement) -> MissionError:
     """The decomposer refused the mission (exit status 2): its messages, for the user."""
-    lines = [line.removeprefix("error: ") for line in measured.stderr.splitlines() if line.startswith("error: ")]
-    return MissionError([Problem("", line) for line in lines] or
+    return MissionError([Problem("", line) for line in measured.errors] or
                         Problem("", f"the {decomposer} decomposer refused the mission: {_failure(measured)}"))
 
 
@@ -154,10 +148,10 @@ def run_ours(request: CompareRequest, decomposer: str, work: Path) -> Run:
         raise _input_error(decomposer, measured)
     if measured.exit_status == 3:
         return _measured_run(decomposer, measured, count=0, note="no valid mission decomposition")
-    summaries = [line for line in measured.stdout.splitlines() if line.startswith("{")]
-    if measured.exit_status != 0 or not summaries:
+    summary = measured.summary
+    if measured.exit_status != 0 or summary is None or "mission_decompositions" not in summary:
         return _measured_run(decomposer, measured, error=_failure(measured))
-    count = int(json.loads(summaries[-1])["mission_decompositions"])
+    count = int(summary["mission_decompositions"])
     view = OutputView.of(load_decomposition_output(str(out))) if _within(request, count) else None
     out.unlink(missing_ok=True)
     return _measured_run(decomposer, measured, count=count, view=view)

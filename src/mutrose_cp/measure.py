@@ -13,6 +13,7 @@ reaches the main thread only, the event reaches every waiting thread.
 """
 from __future__ import annotations
 
+import json
 import os
 import resource
 import signal
@@ -23,7 +24,7 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Mapping, Sequence
+from typing import IO, Any, Mapping, Sequence
 
 POLL_SECONDS = 0.01  # how often the parent looks whether the child has ended
 
@@ -51,6 +52,35 @@ class Measurement:
     @property
     def succeeded(self) -> bool:
         return self.exit_status == 0
+
+    @property
+    def summary(self) -> dict[str, Any] | None:
+        """The command's ``--json-summary``: the last line of stdout that is a JSON object."""
+        for line in reversed(self.stdout.splitlines()):
+            if line.startswith("{"):
+                try:
+                    value = json.loads(line)
+                except json.JSONDecodeError:
+                    continue
+                if isinstance(value, dict):
+                    return value
+        return None
+
+    @property
+    def errors(self) -> list[str]:
+        """The command's own ``error:`` lines, without the prefix."""
+        return [line.removeprefix("error: ") for line in self.stderr.splitlines() if line.startswith("error: ")]
+
+    @property
+    def ending(self) -> str:
+        """How the process ended: its exit status, or the signal that killed it."""
+        status = self.exit_status
+        if status is not None and status < 0:
+            try:
+                return f"killed by {signal.Signals(-status).name}"
+            except ValueError:
+                return f"killed by signal {-status}"
+        return f"exit status {status}"
 
 
 def _peak_mb(usage: resource.struct_rusage) -> float:

@@ -7,10 +7,8 @@ values: they are all that travels between a Ray driver and its workers.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
-import signal
 import sys
 import tempfile
 import threading
@@ -76,7 +74,7 @@ def run_job(spec: JobSpec, cancel: threading.Event | None = None) -> Outcome:
         run = dataclasses.replace(run, peak_mb=int(reported) / 1024)
     status = classify(run, spec.memory_mb)
     return Outcome(status=status, exit_code=run.exit_status, seconds=round(run.seconds, 3),
-                   peak_mb=round(run.peak_mb, 1), summary=json_summary(run.stdout),
+                   peak_mb=round(run.peak_mb, 1), summary=run.summary,
                    problems=problems(run, status, spec))
 
 
@@ -99,36 +97,14 @@ def classify(run: Measurement, memory_mb: int) -> str:
     return CRASHED if abnormal else FAILED
 
 
-def json_summary(stdout: str) -> dict[str, Any] | None:
-    """The command's ``--json-summary``: the last line of stdout that is a JSON object."""
-    for line in reversed(stdout.splitlines()):
-        if line.startswith("{"):
-            try:
-                value = json.loads(line)
-            except json.JSONDecodeError:
-                continue
-            if isinstance(value, dict):
-                return value
-    return None
-
-
 def problems(run: Measurement, status: str, spec: JobSpec) -> list[str]:
     """What went wrong, for the results: the command's own ``error:`` lines, or why the batch
     stopped it, or the end of what a crashed process printed."""
-    errors = [line.removeprefix("error: ") for line in run.stderr.splitlines() if line.startswith("error: ")]
+    errors = run.errors
     if status == TIMEOUT:
         return [f"stopped at the time limit of {spec.time_limit:g} s"]
     if status == MEMORY:
         return errors or [f"ran out of memory under the limit of {spec.memory_mb} MB"]
     if status == CRASHED:
-        return [_how_it_ended(run.exit_status), *run.stderr.strip().splitlines()[-5:]]
+        return [run.ending, *run.stderr.strip().splitlines()[-5:]]
     return errors or run.stderr.strip().splitlines()[-5:]  # a failure in its own words, whatever they are
-
-
-def _how_it_ended(exit_status: int | None) -> str:
-    if exit_status is not None and exit_status < 0:
-        try:
-            return f"killed by {signal.Signals(-exit_status).name}"
-        except ValueError:
-            return f"killed by signal {-exit_status}"
-    return f"exit status {exit_status}"
