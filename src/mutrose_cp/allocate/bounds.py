@@ -27,6 +27,7 @@ from typing import Iterable
 
 from ..model.task_graph import OperatorVertex, TaskGraph, TaskVertex
 from ..solve.boolean_model import FALSE, TRUE, AndOf, Clause, Exactly, Lit, OrOf
+from .load import ways_in
 from .model import Objective
 from .problem import AllocationProblem
 
@@ -163,13 +164,11 @@ def _assignments(lp: _Lp, problem: AllocationProblem, y: dict[str, Expr]) -> dic
 def _visits(lp: _Lp, problem: AllocationProblem, x: dict[tuple[str, str], Expr]) -> dict[tuple[str, str], tuple[float, Expr]]:
     """``(place, robot) -> (cheapest way in, v[place, robot])`` for the places that cost a trip."""
     out: dict[tuple[str, str], tuple[float, Expr]] = {}
+    ways = ways_in(problem)  # a robot without a start reaches its first place for free: none there
     for robot in problem.fleet.robots:
-        if robot.start is None:
-            continue  # a robot without a start reaches its first place for free
         places = {p for (d, r) in x if r == robot.name and (p := problem.jobs[d].location) is not None}
         for place in places:
-            sources = (places - {place}) | {robot.start}
-            cheapest = min(problem.time(robot, s, place) for s in sources)
+            cheapest = ways.get(robot.name, {}).get(place, 0)
             if cheapest > 0:
                 out[(place, robot.name)] = (float(cheapest), lp.var(("v", place, robot.name), 0.0, 1.0))
     for (d, r), e in x.items():
