@@ -179,11 +179,10 @@ def _visits(lp: _Lp, problem: AllocationProblem, x: dict[tuple[str, str], Expr])
 
 
 def _start_times(lp: _Lp, problem: AllocationProblem, y: dict[str, Expr], makespan: Expr) -> None:
-    robots = {r.name: r for r in problem.fleet.robots}
     start = {d: lp.var(("s", d)) for d in problem.jobs}
     for d, job in problem.jobs.items():
         lp.add_le([(1.0, start[d]), (float(job.duration), y[d]), (-1.0, makespan)])
-        arrival = min((problem.time(robots[r], robots[r].start, job.location) for r in job.candidates), default=0)
+        arrival = problem.earliest_arrival(job)
         if arrival:
             lp.add_le([(float(arrival), y[d]), (-1.0, start[d])])
     for first, second in problem.precedences:

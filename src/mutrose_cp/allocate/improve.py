@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import random
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Iterator, Mapping, Sequence
 
 from .options import Objective
@@ -60,7 +60,7 @@ class _Evaluator:
     def __init__(self, problem: AllocationProblem, chosen: Sequence[str], objective: Objective) -> None:
         self.problem = problem
         self.objective = objective
-        self.robots = {r.name: r for r in problem.fleet.robots}
+        self.robots = problem.robots
         self.before = chosen_predecessors(problem, set(chosen))
         self.chosen = list(chosen)
         self.count = 0
@@ -238,6 +238,7 @@ class _Around:
     best: Evaluated
     end: dict[str, int]
     trip: Callable[[str, str | None, str | None], int]  # (robot, from, to) -> seconds
+    current: dict[str, int] = field(default_factory=dict)  # each robot's work now (see no_longer)
 
     def units_of(self, robot: str) -> list[list[str]]:
         """``robot``'s units, the longest first, each in the order of its start times."""
@@ -254,7 +255,7 @@ class _Around:
     def work(self, robot: str, sequence: Sequence[str]) -> int:
         """What ``robot`` spends on ``sequence`` without waiting: its jobs and its trips."""
         jobs = self.problem.jobs
-        here = next(r.start for r in self.problem.fleet.robots if r.name == robot)
+        here = self.problem.robots[robot].start
         total = 0
         for j in sequence:
             total += jobs[j].duration + self.trip(robot, here, jobs[j].location)
@@ -264,7 +265,9 @@ class _Around:
     def no_longer(self, robot: str, sequence: Sequence[str]) -> bool:
         """Whether ``robot`` spends no more on ``sequence`` than on its sequence now: the moves
         beyond relocation are evaluated only then, as the evaluations are what the search spends."""
-        return self.work(robot, sequence) <= self.work(robot, self.sequences[robot])
+        if robot not in self.current:
+            self.current[robot] = self.work(robot, self.sequences[robot])
+        return self.work(robot, sequence) <= self.current[robot]
 
 
 def _relocations(around: _Around, robot: str) -> Iterator[Sequences]:
@@ -327,14 +330,16 @@ def _relocate(problem: AllocationProblem, sequences: Sequences, unit: list[str],
     where it adds the least travel to ``target``'s sequence."""
     out = {r: list(s) for r, s in sequences.items()}
     out[source] = [j for j in out[source] if j not in unit]
-    robot = next(r for r in problem.fleet.robots if r.name == target)
+    robot = problem.robots[target]
     sequence = out[target]
     earliest = 0
     for j in unit:
         place = problem.jobs[j].location
         best_at, best_cost = len(sequence), None
+        before = _place_before(problem, sequence, earliest, robot.start)
         for at in range(earliest, len(sequence) + 1):
-            before = _place_before(problem, sequence, at, robot.start)
+            if at > earliest:  # where the robot is before the at-th job: carried along
+                before = problem.jobs[sequence[at - 1]].location or before
             after = problem.jobs[sequence[at]].location if at < len(sequence) else None
             cost = problem.time(robot, before, place) + problem.time(robot, place, after or place) - (
                 problem.time(robot, before, after) if after else 0)

@@ -123,7 +123,7 @@ def pools(problem: AllocationProblem) -> list[frozenset[str]]:
 def _pools(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, Any],
            ways: dict[str, dict[str, int]], makespan: cp_model.IntVar) -> None:
     """Each pool's work and ways in fit in ``|S| * makespan``."""
-    robots = {r.name: r for r in problem.fleet.robots}
+    robots = problem.robots
     for number, pool in enumerate(pools(problem)):
         jobs = [j for j in problem.jobs.values() if j.candidates and set(j.candidates) <= pool]
         if not jobs:
@@ -196,10 +196,9 @@ def _shared_robots(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict
 def _chains(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, Any],
             makespan: cp_model.IntVar, horizon: int) -> None:
     """Starts after the earliest arrival and after the predecessors; ends by the makespan."""
-    robots = {r.name: r for r in problem.fleet.robots}
     start = {d: m.new_int_var(0, horizon, f"load_start[{d}]") for d in problem.jobs}
     for d, job in problem.jobs.items():
-        arrival = min((problem.time(robots[r], robots[r].start, job.location) for r in job.candidates), default=0)
+        arrival = problem.earliest_arrival(job)
         if arrival:
             m.add(start[d] >= arrival).only_enforce_if(chosen[d])
         m.add(makespan >= start[d] + job.duration * chosen[d])
@@ -217,6 +216,6 @@ def carry_time(problem: AllocationProblem, first: str, second: str) -> int:
     least time between them when the same robots do both (the trip times keep the triangle
     inequality, so a detour through other places is never quicker)."""
     a, b = problem.jobs[first], problem.jobs[second]
-    robots = {r.name: r for r in problem.fleet.robots}
+    robots = problem.robots
     return min((problem.time(robots[r], a.location, b.location) for r in a.candidates if r in b.candidates),
                default=0)

@@ -67,7 +67,7 @@ def _near_robots(problem: AllocationProblem, keep: dict[str, tuple[str, ...]]) -
     if pairs <= CANDIDATE_BUDGET:
         return None
     per_job = max(3, CANDIDATE_BUDGET // len(problem.jobs))
-    robots = {r.name: r for r in problem.fleet.robots}
+    robots = problem.robots
     out = {}
     for job in problem.jobs.values():
         near = sorted(job.candidates, key=lambda r: (problem.time(robots[r], robots[r].start, job.location), r))

@@ -13,6 +13,7 @@ in a fleet file against the mission (``check --fleet``).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 from ..errors import MissionError, Problem, closest
@@ -59,6 +60,15 @@ class AllocationProblem:
 
     def time(self, robot: Robot, a: str | None, b: str | None) -> int:
         return self.travel.time(robot, a, b)
+
+    @cached_property
+    def robots(self) -> dict[str, Robot]:
+        """The fleet's robots by name."""
+        return {r.name: r for r in self.fleet.robots}
+
+    def earliest_arrival(self, job: Job) -> int:
+        """The quickest trip of an able robot from its start to ``job``'s place."""
+        return min((self.time(self.robots[r], self.robots[r].start, job.location) for r in job.candidates), default=0)
 
 
 def place_of(location: object) -> str | None:

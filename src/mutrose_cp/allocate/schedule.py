@@ -57,7 +57,7 @@ def compact(problem: AllocationProblem, jobs: Sequence[str], teams: Mapping[str,
     predecessors = chosen_predecessors(problem, set(jobs))
     early_start: dict[str, int] = {}
     early_end: dict[str, int] = {}
-    robots = {r.name: r for r in problem.fleet.robots}
+    robots = problem.robots
     free = {r.name: 0 for r in problem.fleet.robots}
     place = {r.name: r.start for r in problem.fleet.robots}
     for j in order:

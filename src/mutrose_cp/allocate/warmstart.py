@@ -130,7 +130,7 @@ class _ListScheduler:
 
     def __init__(self, problem: AllocationProblem, chosen: list[str]) -> None:
         self.problem = problem
-        self.robots = {r.name: r for r in problem.fleet.robots}
+        self.robots = problem.robots
         self.free = dict.fromkeys(self.robots, 0)
         self.place = {r.name: r.start for r in problem.fleet.robots}
         self.partners = _partners(problem, set(chosen))
