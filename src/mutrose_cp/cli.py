@@ -468,12 +468,16 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--max-input-mb", type=count_option(1), default=256, metavar="MB",
                        help="refuse input files larger than this (default 256)")
 
-    def common(p: argparse.ArgumentParser) -> None:
+    def mission_inputs(p: argparse.ArgumentParser) -> None:
+        """Which mission: its three files, or its folder and the files to pick there."""
         p.add_argument("inputs", nargs="+", metavar="INPUT",
                        help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
         p.add_argument("--config", help="in a mission folder with several configurations, the one to use")
         p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
         p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
+
+    def common(p: argparse.ArgumentParser) -> None:
+        mission_inputs(p)
         reading(p)
         p.add_argument("--world", metavar="FILE",
                        help="read the world knowledge from FILE instead of the configuration's world_db.path")
@@ -543,14 +547,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("compare", help="run both decomposers (and the original tool) on the mission, each in its "
                                        "own process, and compare time, memory and results")
-    p.add_argument("inputs", nargs="+", metavar="INPUT",
-                   help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
-    p.add_argument("--config", help="in a mission folder with several configurations, the one to use")
-    p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
-    p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
-    p.add_argument("--lenient-xml", action="store_true", help="passed to the decomposers (see decompose)")
-    p.add_argument("--max-input-mb", type=count_option(1), default=256, metavar="MB",
-                   help="refuse input files larger than this (default 256)")
+    mission_inputs(p)
+    reading(p)  # passed on to the decomposers
     p.add_argument("--time-limit", type=seconds, default=DEFAULT_TIME_LIMIT, metavar="S",
                    help=f"wall-time limit of each run in seconds (default {DEFAULT_TIME_LIMIT:g}); a run over it "
                         "is killed")
