@@ -61,17 +61,23 @@ class _Progress:
         self.stage(self.label, done, total)
 
     def stage(self, label: str, done: int, total: int) -> None:
+        of = f"/{total}" if total else ""
+        self.show(f"{label}: {done}{of}", ended=bool(total) and done >= total, now=done >= total)
+
+    def show(self, text: str, *, ended: bool = False, now: bool = False) -> None:
+        """Redraw the line as ``text``, at most every 0.1 s unless ``now``; ``ended`` closes it."""
         if not self.enabled:
             return
-        now = time.monotonic()
-        if now - self.last < 0.1 and done < total:
+        moment = time.monotonic()
+        if moment - self.last < 0.1 and not now:
             return
-        self.last = now
-        of = f"/{total}" if total else ""
-        sys.stderr.write(f"\r\033[K{label}: {done}{of}")
-        if total and done >= total:
-            sys.stderr.write("\n")
+        self.last = moment
+        sys.stderr.write(f"\r\033[K{text}" + ("\n" if ended else ""))
         sys.stderr.flush()
+
+    def clear(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\r\033[K")
 
 
 def _summary(args: argparse.Namespace, data: dict, line: str, mission: Mission | None = None) -> None:
@@ -206,19 +212,12 @@ class _AllocationProgress:
         from .allocate.search import Progress
 
         assert isinstance(progress, Progress)
-        now = time.monotonic()
-        if not self.line.enabled or now - self.line.last < 0.1:
-            return
-        self.line.last = now
         best = "none yet" if progress.objective is None else f"{progress.objective:g}"
         gap = "" if progress.gap is None else f", gap {100 * progress.gap:.1f}%"
-        sys.stderr.write(f"\r\033[Kallocating: {self.kind} {best}, bound {progress.bound:g}{gap} "
-                         f"({progress.seconds:.1f} s)")
-        sys.stderr.flush()
+        self.line.show(f"allocating: {self.kind} {best}, bound {progress.bound:g}{gap} ({progress.seconds:.1f} s)")
 
     def close(self) -> None:
-        if self.line.enabled:
-            sys.stderr.write("\r\033[K")
+        self.line.clear()
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
