@@ -25,7 +25,8 @@ from .htn import ground_path
 if TYPE_CHECKING:
     from .expansion import Value
     from .htn import DecompositionPath, Step
-    from .model import Domain, RobotNumber
+    from .expansion import TaskInstance
+    from .model import AbstractTask, Domain, RobotNumber
     from .model.task_graph import Decomposition
     from .output import PredicatePrinter, PrintedPredicate
 
@@ -38,15 +39,37 @@ def _member(key: str, text: str) -> str:
     return f'{PAD}"{key}": {text}'
 
 
-def _pred_tree(p: PrintedPredicate) -> dict[str, str]:
+def pred_tree(p: PrintedPredicate) -> dict[str, str]:
+    """A printed predicate as the entry lists it."""
     return {"predicate": p.text, "vars": p.args[-1] if p.args else "", "var_types": p.sorts[-1] if p.sorts else ""}
+
+
+def robots_tree(rn: RobotNumber) -> dict[str, str]:
+    """An entry's ``robots_num``."""
+    return ({"fixed": "True", "num": str(rn.min)} if rn.fixed
+            else {"fixed": "False", "min": str(rn.min), "max": str(rn.max)})
+
+
+def actions_tree(path: DecompositionPath) -> dict[str, dict[str, str]]:
+    """An entry's ``decomposition``: the path's actions, ``a0``, ``a1``..."""
+    return {f"a{i}": {"name": s.name, "arguments": " ".join(s.args)} for i, s in enumerate(path.actions)}
+
+
+def argument_values(task: AbstractTask, inst: TaskInstance) -> dict[str, str]:
+    """Each parameter of the HDDL task with the instance's value: a collection as ``[a,b]``,
+    an unbound parameter empty."""
+    values: dict[str, str] = {p.name: "" for p in task.parameters}
+    for pv in inst.parameters:
+        if pv.hddl_param in values:
+            values[pv.hddl_param] = "[" + ",".join(pv.value) + "]" if isinstance(pv.value, tuple) else pv.value
+    return values
 
 
 def predicate_members(printed: tuple[list[PrintedPredicate], list[PrintedPredicate]]) -> str:
     """The ``preconditions`` and ``effects`` members of an entry."""
     pre, eff = printed
-    return (_member("preconditions", boost_json([_pred_tree(p) for p in pre], 12)) + ",\n"
-            + _member("effects", boost_json([_pred_tree(e) for e in eff], 12)))
+    return (_member("preconditions", boost_json([pred_tree(p) for p in pre], 12)) + ",\n"
+            + _member("effects", boost_json([pred_tree(e) for e in eff], 12)))
 
 
 class _Template:
@@ -95,7 +118,7 @@ class EntryTemplates:
         path of its own, mostly with the same steps)."""
         known = self._actions.get(id(path))
         if known is None:
-            actions = {f"a{i}": {"name": s.name, "arguments": " ".join(s.args)} for i, s in enumerate(path.actions)}
+            actions = actions_tree(path)
             constants = frozenset(a for s in path.steps for c in (*s.preconditions, *s.effects, *s.numeric_effects)
                                   for a in c.args if not a.startswith("?"))
             same = self._same_steps.setdefault(path.steps, id(path))
@@ -109,9 +132,7 @@ class EntryTemplates:
         return text
 
     def _robots(self, rn: RobotNumber) -> str:
-        tree = ({"fixed": "True", "num": str(rn.min)} if rn.fixed
-                else {"fixed": "False", "min": str(rn.min), "max": str(rn.max)})
-        return _member("robots_num", boost_json(tree, 12))
+        return _member("robots_num", boost_json(robots_tree(rn), 12))
 
     # -- the printed predicates, per template --------------------------------------------------
     def _sorts(self, value: str) -> tuple[str, ...]:
@@ -169,11 +190,7 @@ class EntryTemplates:
     def entry(self, dec: Decomposition, group: bool, divisible: bool) -> str:
         """The task entry of ``dec`` at indent 8, as ``boost_json`` of ``OutputBuilder.task_entry``."""
         inst = dec.instance
-        task = self.domain.task_by_name[inst.name]
-        values: dict[str, str] = {p.name: "" for p in task.parameters}
-        for pv in inst.parameters:
-            if pv.hddl_param in values:
-                values[pv.hddl_param] = "[" + ",".join(pv.value) + "]" if isinstance(pv.value, tuple) else pv.value
+        values = argument_values(self.domain.task_by_name[inst.name], inst)
         loc = inst.location
         decomposition, constants, path_key = self._path(dec.path)
         members = (

@@ -13,7 +13,7 @@ from typing import IO, TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
 
 from .boost_json import Tree, _write_list, boost_json, write_boost_json
 from .constraints import EC, SEQ, Constraint
-from .entry_templates import EntryTemplates
+from .entry_templates import EntryTemplates, actions_tree, argument_values, pred_tree, robots_tree
 from .errors import MissionError
 from .model import Configuration, Domain, InitialState, Literal, SemanticMapping
 from .output_file import atomic_writer
@@ -99,10 +99,6 @@ class PredicatePrinter:
         return [p for p in pre if p is not None], [e for e in eff if e is not None]
 
 
-def _value(v: str | tuple[str, ...]) -> str:
-    return "[" + ",".join(v) + "]" if isinstance(v, tuple) else v
-
-
 # ---------------------------------------------------------------------------------------------
 # The output document
 
@@ -148,36 +144,22 @@ class OutputBuilder:
     def task_entry(self, dec: Decomposition, group: bool, divisible: bool) -> dict[str, Tree]:
         inst = dec.instance
         task = self.m.domain.task_by_name[inst.name]
-        values: dict[str, str] = {p.name: "" for p in task.parameters}
-        for pv in inst.parameters:
-            if pv.hddl_param in values:
-                values[pv.hddl_param] = _value(pv.value)
         pre, eff = self.printer.printed(dec)
         loc = inst.location
         return {
             "id": dec.id,
             "name": inst.name,
             "arguments": {p.name: p.type for p in task.parameters},
-            "arguments_values": values,
+            "arguments_values": argument_values(task, inst),
             "locations": list(loc) if isinstance(loc, tuple) else (loc or ""),
-            "robots_num": (
-                {"fixed": "True", "num": str(inst.robot_number.min)}
-                if inst.robot_number.fixed
-                else {"fixed": "False", "min": str(inst.robot_number.min), "max": str(inst.robot_number.max)}
-            ),
-            "preconditions": [self._pred(p) for p in pre],
-            "effects": [self._pred(p) for p in eff],
+            "robots_num": robots_tree(inst.robot_number),
+            "preconditions": [pred_tree(p) for p in pre],
+            "effects": [pred_tree(p) for p in eff],
             "triggering_events": list(inst.triggering_events),
-            "decomposition": {
-                f"a{i}": {"name": s.name, "arguments": " ".join(s.args)} for i, s in enumerate(dec.path.actions)
-            },
+            "decomposition": actions_tree(dec.path),
             "group": str(group),
             "divisible": str(divisible),
         }
-
-    @staticmethod
-    def _pred(p: PrintedPredicate) -> dict[str, str]:
-        return {"predicate": p.text, "vars": p.args[-1] if p.args else "", "var_types": p.sorts[-1] if p.sorts else ""}
 
     def _constraint_json(self, c: Constraint) -> str:
         """One constraint at indent 8, formatted directly (there can be a million)."""
