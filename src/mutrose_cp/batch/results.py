@@ -22,7 +22,7 @@ import json
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import IO, Any, Iterable
+from typing import IO, Any, Callable, Iterable
 
 from .. import __version__
 from ..errors import MissionError
@@ -85,6 +85,7 @@ class InputHasher:
     def __init__(self, base: Path) -> None:
         self.base = base
         self._digests: dict[tuple[str, int, int], str] = {}
+        self._worlds: dict[tuple[str, int, int, bool], Path] = {}  # a configuration read by many jobs: read once
 
     def job_hash(self, job: Job, args: argparse.Namespace) -> str:
         h = hashlib.sha256()
@@ -97,10 +98,28 @@ class InputHasher:
     def _files(self, job: Job, args: argparse.Namespace) -> list[tuple[str, str]]:
         named = [a for a in (*job.inputs, *job.options) if os.path.isfile(a)]
         try:
-            mission = [str(p) for p in mission_files(job, args)]
+            mission = [str(p) for p in mission_files(job, args, self._world)]
         except (MissionError, OSError) as err:  # the job will fail on it: the reason stands in for the files
             return [(name, self._digest(name)) for name in named] + [("unresolved", str(err))]
         return [(name, self._digest(name)) for name in sorted(set(named) | set(mission))]
+
+    def _world(self, config: Path, lenient: bool) -> Path:
+        """The world file ``config`` names (as the command resolves it from here)."""
+        from ..io.config import load_configuration
+        from ..mission import resolve_config_path
+
+        try:
+            st = os.stat(config)
+        except OSError:  # the reader says what is wrong with it
+            st = None
+        key = (os.path.realpath(config), st.st_size, st.st_mtime_ns, lenient) if st else None
+        if key is None or key not in self._worlds:
+            cfg = load_configuration(config, lenient=lenient)
+            world = resolve_config_path(cfg.world_db.path, config)
+            if key is None:
+                return world
+            self._worlds[key] = world
+        return self._worlds[key]
 
     def _digest(self, name: str) -> str:
         try:
@@ -114,12 +133,11 @@ class InputHasher:
         return self._digests[key]
 
 
-def mission_files(job: Job, args: argparse.Namespace) -> list[Path]:
+def mission_files(job: Job, args: argparse.Namespace, world_of: Callable[[Path, bool], Path]) -> list[Path]:
     """The HDDL, goal model, configuration and world a job reads, found as the command finds them
-    (``find_mission_files``, the configuration's world path or ``--world``).  Empty for a job
-    whose inputs are not a mission."""
-    from ..io.config import load_configuration
-    from ..mission import find_mission_files, resolve_config_path
+    (``find_mission_files``, ``--world`` or the configuration's world path, which ``world_of``
+    reads).  Empty for a job whose inputs are not a mission."""
+    from ..mission import find_mission_files
 
     first = Path(job.inputs[0])
     if first.is_dir():
@@ -131,8 +149,7 @@ def mission_files(job: Job, args: argparse.Namespace) -> list[Path]:
         return []
     world = getattr(args, "world", None)
     if world is None:
-        cfg = load_configuration(config, lenient=getattr(args, "lenient_xml", False))
-        world = resolve_config_path(cfg.world_db.path, config)
+        world = world_of(config, getattr(args, "lenient_xml", False))
     return [hddl, gm, config, Path(world)]
 
 
