@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import shutil
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,7 @@ import pytest
 from allocation_checker import check_allocation
 from mutrose_cp.allocate import AllocationOptions, Fleet, Objective
 from mutrose_cp.allocate.allocation import Allocation
+from mutrose_cp.allocate.budget import JOB_STEPS_PER_UNIT, Budget
 from mutrose_cp.allocate.improve import evaluate, improve
 from mutrose_cp.allocate.load import load_bound
 from mutrose_cp.allocate.output import write_decomposition, write_schedule
@@ -85,7 +87,7 @@ def test_the_load_bound_counts_the_pool_of_able_robots():
     bound is above the whole fleet's average work."""
     mission = Mission.load(*find_mission_files(DELIVERY))
     problem = build_problem(mission.decomposition_model(), Fleet.read(FLEET))
-    bound = load_bound(problem, Objective(), 10.0)
+    bound = load_bound(problem, Objective(), Budget(10.0))
     chosen = least_work_decomposition(problem)
     assert chosen is not None and bound.decompositions
     average = sum(problem.jobs[d].duration for d in chosen) / len(problem.fleet.robots)
@@ -100,9 +102,9 @@ def test_the_load_bound_counts_the_trip_between_tasks_of_the_same_robot(monkeypa
 
     mission = Mission.load(*find_mission_files(DELIVERY))
     problem = build_problem(mission.decomposition_model(), Fleet.read(FLEET))
-    with_trips = load_bound(problem, Objective(), 10.0)
+    with_trips = load_bound(problem, Objective(), Budget(10.0))
     monkeypatch.setattr(load, "carry_time", lambda *_: 0)
-    without = load_bound(problem, Objective(), 10.0)
+    without = load_bound(problem, Objective(), Budget(10.0))
     assert with_trips.status == without.status == "OPTIMAL"
     assert with_trips.value is not None and without.value is not None
     assert with_trips.value > without.value
@@ -112,7 +114,7 @@ def test_the_warm_start_passes_the_checker(tmp_path):
     for number, (mission_dir, fleet_path) in enumerate(_variants(tmp_path)):
         mission = Mission.load(*find_mission_files(mission_dir))
         problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))
-        warm = warm_start(problem, load_bound(problem, Objective(), 10.0).decompositions)
+        warm = warm_start(problem, load_bound(problem, Objective(), Budget(10.0)).decompositions)
         assert warm is not None
         end = {j: warm.start[j] + problem.jobs[j].duration for j in warm.chosen}
         schedule = compact(problem, warm.chosen, warm.teams, warm.start, end)
@@ -135,7 +137,7 @@ def _listed(tmp_path, deliveries: int, robots: int):
     """A generated mission and fleet, its allocation problem, the load relaxation's balanced
     decomposition and its list schedule."""
     mission, fleet_path, problem = _generated(tmp_path, deliveries, robots)
-    chosen = load_bound(problem, Objective(), 10.0).decompositions[-1]
+    chosen = load_bound(problem, Objective(), Budget(10.0)).decompositions[-1]
     plan = greedy_plan(problem, chosen)
     assert plan is not None
     return mission, fleet_path, problem, chosen, plan
@@ -145,7 +147,7 @@ def test_the_warm_start_spreads_the_deliveries(tmp_path):
     """Twelve deliveries for six robots: the list schedule of the balanced decomposition ends
     well before the one of the least-work decomposition, which needs the two all-rounders."""
     mission, fleet_path, problem = _generated(tmp_path, 12, 6)
-    balanced = load_bound(problem, Objective(), 10.0).decompositions[-1]
+    balanced = load_bound(problem, Objective(), Budget(10.0)).decompositions[-1]
     least = least_work_decomposition(problem)
     assert least is not None
     makespans = []
@@ -188,12 +190,12 @@ def test_local_moves_shorten_the_list_schedule(tmp_path):
     the same schedule (the search stops on its own budget, not on the clock)."""
     mission, fleet_path, problem, chosen, plan = _listed(tmp_path, 12, 6)
     listed = max(plan[1][j] + problem.jobs[j].duration for j in chosen)
-    teams, start, value = improve(problem, chosen, *plan, Objective(), 600.0)
+    teams, start, value = improve(problem, chosen, *plan, Objective(), Budget(600.0))
     assert value == max(start[j] + problem.jobs[j].duration for j in chosen) < 0.9 * listed
     _check_plan(tmp_path, mission, fleet_path, problem, chosen, teams, start, "improved")
     evaluated = evaluate(problem, chosen, robot_sequences(problem, chosen, teams, start))
     assert evaluated is not None and evaluated.start == start
-    assert improve(problem, chosen, *plan, Objective(), 600.0) == (teams, start, value)
+    assert improve(problem, chosen, *plan, Objective(), Budget(600.0)) == (teams, start, value)
 
 
 def test_orders_against_the_precedences_are_no_schedule(tmp_path):
@@ -237,12 +239,105 @@ def test_each_move_shortens_a_schedule_alone(tmp_path, monkeypatch, move):
     monkeypatch.setattr(local, "STALL", 1)  # one descent
     monkeypatch.setattr(local, "KICK", 0)
     monkeypatch.setattr(local, "MOVES", (local._relocations,))
-    teams, start, value = improve(problem, chosen, *plan, Objective(), 600.0)
+    teams, start, value = improve(problem, chosen, *plan, Objective(), Budget(600.0))
     if move != "_swaps":
         teams, start = _units_backwards(problem, chosen, teams, start)
         value = max(start[j] + problem.jobs[j].duration for j in chosen)
     monkeypatch.setattr(local, "MOVES", (getattr(local, move),))
-    better = improve(problem, chosen, teams, start, Objective(), 600.0)
+    better = improve(problem, chosen, teams, start, Objective(), Budget(600.0))
     assert better[2] < value
     _check_plan(tmp_path, mission, fleet_path, problem, chosen, *better[:2], move)
-    assert improve(problem, chosen, teams, start, Objective(), 600.0) == better
+    assert improve(problem, chosen, teams, start, Objective(), Budget(600.0)) == better
+
+
+def test_a_work_limit_gives_the_same_schedule_on_a_slower_machine(tmp_path, monkeypatch):
+    """``--work-limit``: a search cut by its budget (twelve deliveries for six robots, not
+    proven in one unit) writes the same bytes when the clock runs a thousand times faster (a
+    machine that much slower), and every CP-SAT run of it is limited by deterministic time only;
+    a clock budget would end each phase at once."""
+    from mutrose_cp.allocate import search as search_module
+    from mutrose_cp.solve import run
+
+    limits = []
+
+    def recording(solve):
+        def wrapper(proto, **kwargs):
+            parameters = kwargs.get("parameters")  # none: solved to the end
+            if parameters is not None:
+                limits.append((parameters.max_time_in_seconds, parameters.max_deterministic_time))
+            return solve(proto, **kwargs)
+        return wrapper
+
+    monkeypatch.setattr(run, "run_solver", recording(run.run_solver))
+    monkeypatch.setattr(search_module, "run_solver", recording(search_module.run_solver))
+    mission_dir, fleet_path = generate(12, 6, tmp_path)
+    real = time.perf_counter
+    files = []
+    for name in ("machine", "slower machine"):
+        if name == "slower machine":
+            monkeypatch.setattr(time, "perf_counter", lambda: real() * 1000)
+        out, schedule = tmp_path / f"{name}.json", tmp_path / f"{name} schedule.json"
+        assert main(["allocate", str(mission_dir), "--fleet", str(fleet_path), "-o", str(out),
+                     "--schedule", str(schedule), "-q", "--work-limit", "1"]) == 0
+        monkeypatch.setattr(time, "perf_counter", real)
+        doc = check_allocation(Mission.load(*find_mission_files(mission_dir)), fleet_path, schedule, out)
+        assert doc["objective"]["status"] == "FEASIBLE"  # cut by the budget, not finished
+        files.append((schedule.read_bytes(), out.read_bytes()))
+    assert files[0] == files[1]
+    assert all(seconds == float("inf") for seconds, _ in limits)  # CP-SAT never reads the clock
+    # the load relaxation's two halves of a tenth, and the search's three quarters, per run
+    assert [work for _, work in limits if work != float("inf")] == [0.05, 0.05, 0.75] * 2
+
+
+def test_work_and_time_limits_are_checked(tmp_path, capsys):
+    from mutrose_cp.errors import MissionError
+
+    out = tmp_path / "run.json"
+    for extra, message in ((["--work-limit", "1", "--time-limit", "5"], "not allowed with argument"),
+                           (["--work-limit", "nan"], "nan is not a positive number of units of work"),
+                           (["--work-limit", "0"], "0 is not a positive number of units of work")):
+        assert main(["allocate", str(DELIVERY), "--fleet", str(FLEET), "-o", str(out), *extra]) == 2
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err and not out.exists()
+    for bad in (0, -1.0, float("inf"), float("nan"), True):
+        with pytest.raises(MissionError, match="not a limit"):
+            AllocationOptions(work_limit=bad)
+
+
+def test_a_budget_shares_work_in_fixed_parts_and_time_in_what_is_left():
+    clock, work = Budget(10.0), Budget(10.0, 4.0)
+    assert work.part(0.25) == Budget(2.5, 1.0) and work.after(0.0) == work  # no clock in a work budget
+    assert clock.after(time.perf_counter() - 4.0).seconds <= 6.0
+    assert work.job_steps() == 4 * JOB_STEPS_PER_UNIT and clock.job_steps() is None
+    steps = work.running()
+    assert steps(4 * JOB_STEPS_PER_UNIT - 1) and not steps(4 * JOB_STEPS_PER_UNIT)
+    from mutrose_cp.solve.native import cmh
+
+    for budget, workers in ((clock, 1), (work, 2)):
+        parameters = cmh.SatParameters()
+        budget.limit(parameters, workers)
+        assert (parameters.max_time_in_seconds, parameters.max_deterministic_time,
+                parameters.interleave_search) == ((10.0, float("inf"), False) if budget is clock else
+                                                  (float("inf"), 4.0, True))
+
+
+def test_a_search_without_any_schedule_reports_the_warm_start(tmp_path, monkeypatch):
+    """A short limit can end CP-SAT in its presolve, before it has taken the hint: the warm
+    start's schedule, which is complete, is reported (FEASIBLE, no bound from the search), and
+    without a warm start nothing is (exit 4)."""
+    from mutrose_cp.allocate import allocation
+    from mutrose_cp.solve.run import IncompleteSolveError
+
+    def unfinished(*_args, **_kwargs):
+        raise IncompleteSolveError("CP-SAT did not finish the allocation (UNKNOWN)")
+
+    monkeypatch.setattr(allocation, "search", unfinished)
+    mission = Mission.load(*find_mission_files(DELIVERY))
+    result = mission.allocate(Fleet.read(FLEET), AllocationOptions(time_limit=20))
+    assert result.status == "FEASIBLE" and result.cp_bound is None and result.gap is None
+    assert result.objective >= result.load_value
+    write_schedule(result, tmp_path / "schedule.json")
+    write_decomposition(result, tmp_path / "mission.json", "JSON")
+    check_allocation(mission, FLEET, tmp_path / "schedule.json", tmp_path / "mission.json")
+    with pytest.raises(IncompleteSolveError):
+        mission.allocate(Fleet.read(FLEET), AllocationOptions(time_limit=20, warm_start=False))

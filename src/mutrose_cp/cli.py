@@ -22,7 +22,7 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files, world_file
-from .option_types import count_option, seconds
+from .option_types import count_option, seconds, work_units
 from .output_file import refuse_unsafe_outputs, written_together
 from .process import (FAILURES, Failure, command_settings, exit_process, failure_lines, failure_problems,
                       failure_status, prepare_process, reader_gone)
@@ -168,7 +168,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     schedule_path = Path(args.schedule) if args.schedule else out_path.with_name("schedule.json")
     _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
-    options = AllocationOptions(objective, args.time_limit, args.workers, args.seed)
+    options = AllocationOptions(objective, args.time_limit, args.workers, args.seed, work_limit=args.work_limit)
     progress = _AllocationProgress(not args.quiet, objective.name)
     try:
         with phase("allocating"):
@@ -526,8 +526,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gantt", metavar="FILE.png|svg", help="also draw the schedule (needs matplotlib)")
     p.add_argument("--objective", default="makespan", metavar="makespan|travel|weighted:A,B",
                    help="minimise the makespan (default), the total travel, or A * makespan + B * travel")
-    p.add_argument("--time-limit", type=seconds, default=10.0, metavar="S",
-                   help="stop the search after S seconds with the best schedule found (default 10)")
+    limit = p.add_mutually_exclusive_group()
+    limit.add_argument("--time-limit", type=seconds, default=10.0, metavar="S",
+                       help="stop the search after S seconds with the best schedule found (default 10)")
+    limit.add_argument("--work-limit", type=work_units, metavar="W",
+                       help="stop after W units of deterministic work instead (about a second each): the same "
+                            "schedule on every machine, with any --workers")
     p.add_argument("--workers", type=count_option(1, MAX_WORKERS), default=1, metavar="N",
                    help="CP-SAT search threads (default 1: the same schedule on every finished run)")
     p.add_argument("--seed", type=count_option(0, MAX_SEED), default=0, help="CP-SAT random seed (default 0)")

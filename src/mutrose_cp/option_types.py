@@ -28,14 +28,25 @@ def count_option(minimum: int, maximum: int = MAX_COUNT) -> Callable[[str], int]
     return parse
 
 
-def seconds(text: str) -> float:
-    """An argparse type: a finite positive number of seconds, at most ``MAX_SECONDS``."""
+def _positive(text: str, unit: str) -> float:
+    """A finite positive number of ``unit``, at most ``MAX_SECONDS``."""
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected a number of {unit}, got {text!r}") from None
     if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
+        raise argparse.ArgumentTypeError(f"{text} is not a positive number of {unit}")
     if value > MAX_SECONDS:
-        raise argparse.ArgumentTypeError(f"{text} is out of range: give at most {MAX_SECONDS} seconds")
+        raise argparse.ArgumentTypeError(f"{text} is out of range: give at most {MAX_SECONDS} {unit}")
     return value
+
+
+def seconds(text: str) -> float:
+    """An argparse type: a finite positive number of seconds, at most ``MAX_SECONDS``."""
+    return _positive(text, "seconds")
+
+
+def work_units(text: str) -> float:
+    """An argparse type: a finite positive number of units of deterministic work (about a second
+    each, see ``allocate/budget.py``), at most ``MAX_SECONDS``."""
+    return _positive(text, "units of work")

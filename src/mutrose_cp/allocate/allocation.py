@@ -13,7 +13,9 @@
 The time limit is the whole run's: the load relaxation may take a tenth of it, the warm start's
 local moves about a seventh (two fifths on a large mission, whose restricted search rarely
 improves a good hint) and the LP a quarter (an LP cut short gives no bound), and the search has
-what is left, at least a tenth.
+what is left, at least a tenth.  A work limit instead of the time limit (:mod:`.budget`) is
+shared the same way, the search taking the shares the others leave, so that the schedule does not
+depend on the machine.
 """
 from __future__ import annotations
 
@@ -21,7 +23,9 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Callable
 
+from ..solve.run import IncompleteSolveError
 from .bounds import LpBound, lp_bound
+from .budget import Budget
 from .fleet import Fleet
 from .load import LoadBound, load_bound
 from .model import AllocationModel, build_model, literal_value
@@ -30,7 +34,7 @@ from .problem import AllocationProblem, build_problem
 from .schedule import Schedule, compact
 from .search import Progress, SearchLimits, relative_gap, search
 from .neighbourhood import restrict
-from .warmstart import add_hint, warm_start
+from .warmstart import WarmStart, add_hint, warm_start
 
 if TYPE_CHECKING:
     from ..mission import Mission
@@ -49,9 +53,9 @@ class Allocation:
 
     problem: AllocationProblem
     options: AllocationOptions
-    status: str  # "OPTIMAL" (proven) or "FEASIBLE" (best found at the time limit)
+    status: str  # "OPTIMAL" (proven) or "FEASIBLE" (best found at the time or work limit)
     schedule: Schedule
-    cp_bound: float | None  # CP-SAT's proven lower bound on the objective (None: restricted search)
+    cp_bound: float | None  # CP-SAT's proven bound (None: a restricted search, or the warm start's schedule)
     lp: LpBound | None
     load: LoadBound | None = None
     seconds: dict[str, float] = field(default_factory=dict)
@@ -101,19 +105,19 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
     time limit passes before any schedule is found."""
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
-    budget = options.time_limit
+    budget = options.budget
     problem = build_problem(mission.decomposition_model(), fleet, travel)
     load = None
     if options.lp_bound or options.warm_start:
-        load = load_bound(problem, options.objective, LOAD_SHARE * budget, options.workers, options.seed)
+        load = load_bound(problem, options.objective, budget.part(LOAD_SHARE), options.workers, options.seed)
         seconds["load"] = load.seconds
     warming = time.perf_counter()
     share = LARGE_IMPROVE_SHARE if restrict(problem).active else IMPROVE_SHARE
-    warm = (warm_start(problem, load.decompositions if load else (), options.objective, share * budget, options.seed,
-                       load.value if load else None) if options.warm_start else None)
+    warm = (warm_start(problem, load.decompositions if load else (), options.objective, budget.part(share),
+                       options.seed, load.value if load else None) if options.warm_start else None)
     if warm is not None:
         seconds["warm"] = time.perf_counter() - warming
-    lp = lp_bound(problem, options.objective, LP_SHARE * budget) if options.lp_bound else None
+    lp = lp_bound(problem, options.objective, budget.part(LP_SHARE)) if options.lp_bound else None
     if lp is not None:
         seconds["lp"] = lp.seconds
     restriction = restrict(problem, warm.teams if warm else None,
@@ -122,16 +126,42 @@ def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = Alloca
     if warm is not None:
         add_hint(am, warm)
     seconds["model"] = time.perf_counter() - clock - sum(seconds.values())
-    left = max(SEARCH_SHARE * budget, budget - (time.perf_counter() - clock))
     improve_only = restriction.active and warm is not None  # large-neighbourhood search from the hint
-    outcome = search(am, SearchLimits(left, options.workers, options.seed, improve_only), progress)
-    seconds["search"] = outcome.seconds
-    schedule = _schedule(am, outcome.values)
+    limits = SearchLimits(_search_budget(budget, clock, share), options.workers, options.seed, improve_only)
+    status, bound, schedule, seconds["search"] = _best_schedule(am, limits, progress, warm)
     if not options.lp_bound:
         load = None
     if restriction.active:  # the restricted model's optimum and bound say nothing of the mission's
         return Allocation(problem, options, "FEASIBLE", schedule, None, lp, load, seconds, restricted=True)
-    return Allocation(problem, options, outcome.status, schedule, outcome.bound, lp, load, seconds)
+    return Allocation(problem, options, status, schedule, bound, lp, load, seconds)
+
+
+def _best_schedule(am: AllocationModel, limits: SearchLimits, progress: Callable[[Progress], None] | None,
+                   warm: WarmStart | None) -> tuple[str, float | None, Schedule, float]:
+    """The search's status, bound and best schedule, and its seconds.  When the search ends
+    before it has any schedule (a short limit can end it in CP-SAT's presolve), the warm start's
+    schedule, a complete one that the search was given as its hint, is the best found: FEASIBLE,
+    without a bound from the search."""
+    started = time.perf_counter()
+    try:
+        outcome = search(am, limits, progress)
+    except IncompleteSolveError:
+        if warm is None:
+            raise
+        problem = am.problem
+        end = {j: warm.start[j] + problem.jobs[j].duration for j in warm.chosen}
+        schedule = compact(problem, warm.chosen, warm.teams, warm.start, end)
+        return "FEASIBLE", None, schedule, time.perf_counter() - started
+    return outcome.status, outcome.bound, _schedule(am, outcome.values), outcome.seconds
+
+
+def _search_budget(budget: Budget, started: float, improve_share: float) -> Budget:
+    """The search's budget: what the clock has left since ``started`` (at least a tenth of the
+    time limit), or the work left over by the other phases' shares."""
+    if budget.deterministic:
+        return budget.part(1 - LOAD_SHARE - improve_share)  # the LP counts iterations, not work
+    left = budget.after(started)
+    return left if left.seconds >= SEARCH_SHARE * budget.seconds else budget.part(SEARCH_SHARE)
 
 
 def _schedule(am: AllocationModel, values: list[int]) -> Schedule:

@@ -27,6 +27,7 @@ from typing import Iterable
 
 from ..model.task_graph import OperatorVertex, TaskGraph, TaskVertex
 from ..solve.boolean_model import FALSE, TRUE, AndOf, Clause, Exactly, Lit, OrOf
+from .budget import LP_ITERATIONS, Budget
 from .load import ways_in
 from .model import Objective
 from .problem import AllocationProblem
@@ -79,10 +80,11 @@ class _Lp:
         self.eq.append((row, rhs - constant))
 
 
-def lp_bound(problem: AllocationProblem, objective: Objective, time_limit: float | None = None) -> LpBound:
+def lp_bound(problem: AllocationProblem, objective: Objective, budget: Budget | None = None) -> LpBound:
     """The LP relaxation's optimum, a lower bound on ``objective`` (see the module docstring).
-    Clarabel stops at ``time_limit`` (seconds, building the LP included); an LP it did not
-    solve gives no bound (``value`` None, ``status`` says why)."""
+    Clarabel stops at the clock ``budget`` (building the LP included), or after
+    :data:`~.budget.LP_ITERATIONS` iterations on a work budget; an LP it did not solve gives no
+    bound (``value`` None, ``status`` says why)."""
     started = time.perf_counter()
     lp = _Lp()
     y = _decomposition_relaxation(lp, problem)
@@ -98,7 +100,7 @@ def lp_bound(problem: AllocationProblem, objective: Objective, time_limit: float
     _operator_chains(lp, problem, y, makespan)
     travel = [(cost, e) for cost, e in visits.values()]
     goal = [(float(objective.makespan_weight), makespan)] + [(objective.travel_weight * c, e) for c, e in travel]
-    return _solve(lp, goal, started, time_limit)
+    return _solve(lp, goal, started, budget)
 
 
 def _decomposition_relaxation(lp: _Lp, problem: AllocationProblem) -> dict[str, Expr]:
@@ -225,7 +227,7 @@ def _post_order(tg: TaskGraph) -> list[int]:
     return order
 
 
-def _solve(lp: _Lp, goal: list[tuple[float, Expr]], started: float, time_limit: float | None) -> LpBound:
+def _solve(lp: _Lp, goal: list[tuple[float, Expr]], started: float, budget: Budget | None) -> LpBound:
     import clarabel  # type: ignore[import-untyped]
     import numpy as np
     import scipy.sparse as sp  # type: ignore[import-untyped]
@@ -248,8 +250,10 @@ def _solve(lp: _Lp, goal: list[tuple[float, Expr]], started: float, time_limit: 
     cones = ([clarabel.ZeroConeT(len(lp.eq))] if lp.eq else []) + [clarabel.NonnegativeConeT(len(lp.le))]
     settings = clarabel.DefaultSettings()
     settings.verbose = False
-    if time_limit is not None:
-        left = time_limit - (time.perf_counter() - started)
+    if budget is not None and budget.deterministic:
+        settings.max_iter = LP_ITERATIONS
+    elif budget is not None:
+        left = budget.after(started).seconds
         if left <= 0:
             return LpBound(None, "MaxTime", time.perf_counter() - started)
         settings.time_limit = left

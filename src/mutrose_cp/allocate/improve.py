@@ -22,16 +22,16 @@ descent fixes both, before the schedule is handed to CP-SAT as its hint:
 From a local optimum, a few units moved to random able robots (seeded) start a new descent, and
 the best schedule is kept: an iterated local search.  It stops after ``MAX_EVALUATIONS``
 schedules, after ``STALL`` kicks in a row that found nothing better, when the objective reaches
-a lower bound, or at its time limit, whichever comes first; unless the time limit comes first,
-it is deterministic.
+a lower bound, or at the end of its budget (:mod:`.budget`), whichever comes first; unless a
+clock budget ends it, it is deterministic.
 """
 from __future__ import annotations
 
 import random
-import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterator, Mapping, Sequence
 
+from .budget import Budget
 from .options import Objective
 from .problem import AllocationProblem
 from .schedule import chosen_predecessors, robot_sequences, robot_teams
@@ -137,13 +137,13 @@ def evaluate(problem: AllocationProblem, chosen: Sequence[str], sequences: Mappi
 
 
 def improve(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str, tuple[str, ...]],
-            start: Mapping[str, int], objective: Objective, time_limit: float, seed: int = 0,
+            start: Mapping[str, int], objective: Objective, budget: Budget, seed: int = 0,
             floor: float | None = None) -> tuple[dict[str, tuple[str, ...]], dict[str, int], float]:
     """The descent of the module docstring from the schedule ``teams`` / ``start`` of
     ``chosen``, restarted from random kicks (``seed``) while the budget lasts and the objective
     is above ``floor`` (a lower bound: nothing better exists); returns the teams, start times
     and objective of the best schedule found."""
-    deadline = time.perf_counter() + time_limit
+    running = budget.running()
     evaluator = _Evaluator(problem, chosen, objective)
     sequences = robot_sequences(problem, chosen, teams, start)
     first = evaluator(sequences)
@@ -153,7 +153,7 @@ def improve(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[st
     stall = 0  # kicks since the last improvement
 
     def left() -> bool:
-        return evaluator.count < MAX_EVALUATIONS and stall < STALL and time.perf_counter() < deadline
+        return evaluator.count < MAX_EVALUATIONS and stall < STALL and running(evaluator.count * len(chosen))
 
     sequences, best = _descend(problem, evaluator, sequences, first, units, left)
     rng = random.Random(seed)

@@ -31,6 +31,7 @@ from ortools.sat.python import cp_model
 from ..solve.embedding import cp_literal
 from ..solve.native import cmh
 
+from .budget import Budget
 from .fleet import Robot
 from .model import horizon, literal_value
 from .options import Objective
@@ -50,15 +51,15 @@ class LoadBound:
     seconds: float
 
 
-def load_bound(problem: AllocationProblem, objective: Objective, time_limit: float, workers: int = 1,
+def load_bound(problem: AllocationProblem, objective: Objective, budget: Budget, workers: int = 1,
                seed: int = 0) -> LoadBound:
-    """Solve the relaxation (see the module docstring) within ``time_limit`` seconds: half of it
-    for the bound, the rest for the decomposition of least work among the best relaxed ones."""
+    """Solve the relaxation (see the module docstring) within ``budget``: half of it for the
+    bound, the rest for the decomposition of least work among the best relaxed ones."""
     from ..solve.run import FEASIBLE, OPTIMAL
 
     started = time.perf_counter()
     m, chosen, goal = _relaxation(problem, objective)
-    response = _solve(m, time_limit / 2, workers, seed)
+    response = _solve(m, budget.part(0.5), workers, seed)
     if response.status not in (OPTIMAL, FEASIBLE):  # infeasible: the search says why
         return LoadBound(None, response.status.name, (), time.perf_counter() - started)
     bound = float(response.best_objective_bound)
@@ -70,7 +71,7 @@ def load_bound(problem: AllocationProblem, objective: Objective, time_limit: flo
     for index, value in enumerate(values):
         m.proto.solution_hint.vars.append(index)
         m.proto.solution_hint.values.append(value)
-    lighter = _solve(m, max(0.0, time_limit - (time.perf_counter() - started)), workers, seed)
+    lighter = _solve(m, budget.after(started).part(0.5 if budget.deterministic else 1.0), workers, seed)
     solutions = [values] + ([list(lighter.solution)] if lighter.status in (OPTIMAL, FEASIBLE) else [])
     picked = tuple([d for d, literal in chosen.items() if literal_value(solution, literal)] for solution in solutions)
     return LoadBound(bound, status, picked, time.perf_counter() - started)
@@ -97,11 +98,11 @@ def _relaxation(problem: AllocationProblem, objective: Objective
     return m, chosen, goal
 
 
-def _solve(m: cp_model.CpModel, time_limit: float, workers: int, seed: int) -> cmh.CpSolverResponse:
+def _solve(m: cp_model.CpModel, budget: Budget, workers: int, seed: int) -> cmh.CpSolverResponse:
     from ..solve.run import FEASIBLE, INFEASIBLE, OPTIMAL, run_solver
 
     parameters = cmh.SatParameters()
-    parameters.max_time_in_seconds = time_limit
+    budget.limit(parameters, workers)
     parameters.num_workers = workers
     parameters.random_seed = seed
     return run_solver(m.proto, accept=(OPTIMAL, FEASIBLE, INFEASIBLE, cmh.CpSolverStatus.UNKNOWN),

@@ -6,6 +6,7 @@ import re
 from dataclasses import dataclass
 
 from ..errors import MissionError
+from .budget import Budget
 
 MAX_WORKERS = 256  # CP-SAT search threads; more only add start-up time
 MAX_SEED = 2**31 - 1  # CP-SAT's random_seed is a 32-bit integer
@@ -52,7 +53,9 @@ class AllocationOptions:
 
     CP-SAT runs with ``seed`` and ``workers`` threads (its portfolio, large-neighbourhood
     search included, from 2 on).  A search that ends before ``time_limit`` with one worker
-    always gives the same schedule; a search cut by the time limit depends on the machine."""
+    always gives the same schedule; a search cut by the time limit depends on the machine.
+    ``work_limit`` replaces the clock by units of deterministic work (:mod:`.budget`): the same
+    schedule on any machine, with any number of workers."""
 
     objective: Objective = Objective()
     time_limit: float = 10.0
@@ -60,6 +63,12 @@ class AllocationOptions:
     seed: int = 0
     lp_bound: bool = True  # also compute the LP bound with Clarabel
     warm_start: bool = True  # give CP-SAT a first schedule (decomposition-first) as a hint
+    work_limit: float | None = None  # units of deterministic work instead of time_limit seconds
+
+    @property
+    def budget(self) -> Budget:
+        """The whole run's budget: the time limit, or the work limit when one is given."""
+        return Budget(self.time_limit, self.work_limit)
 
     def __post_init__(self) -> None:
         """CP-SAT's own ranges, checked here so that a bad value is the caller's located error
@@ -69,3 +78,7 @@ class AllocationOptions:
             low = 1 if name == "workers" else 0
             if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
                 raise MissionError(f"{value!r} is out of range: give a whole number from {low} to {high}", f"--{name}")
+        for name, limit in (("time-limit", self.time_limit), ("work-limit", self.work_limit)):
+            if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float))
+                                      or not 0 < limit < float("inf")):
+                raise MissionError(f"{limit!r} is not a limit: give a positive number", f"--{name}")

@@ -90,12 +90,15 @@ def summary_line(allocation: Allocation) -> str:
     schedule = allocation.schedule
     busy = sum(1 for visits in schedule.routes.values() if visits)
     kind = allocation.options.objective.name
+    limit = "time limit" if allocation.options.work_limit is None else "work limit"
     if allocation.status == "OPTIMAL":
         proof = "optimal"
+    elif allocation.restricted:
+        proof = f"best found at the {limit}, search restricted to near robots and places"
     elif allocation.cp_bound is None:
-        proof = "best found at the time limit, search restricted to near robots and places"
+        proof = f"the warm start: the search had no schedule yet at the {limit}"
     else:
-        proof = f"best found at the time limit, bound {allocation.cp_bound:g}, gap {_percent(allocation.gap)}"
+        proof = f"best found at the {limit}, bound {allocation.cp_bound:g}, gap {_percent(allocation.gap)}"
     value = f"{kind} {allocation.objective} ({proof})"
     if kind != "makespan":
         value += f", makespan {schedule.makespan}"

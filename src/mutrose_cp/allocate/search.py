@@ -19,6 +19,7 @@ from typing import Callable
 from ..errors import Problem
 from ..solve.native import cmh
 from ..solve.run import FEASIBLE, INFEASIBLE, OPTIMAL, IncompleteSolveError, run_solver
+from .budget import Budget
 from .model import AllocationModel
 from .problem import NoAllocationError, impossibilities
 
@@ -50,7 +51,7 @@ def relative_gap(objective: float | None, bound: float | None) -> float | None:
 
 @dataclass(frozen=True)
 class SearchLimits:
-    time_limit: float = 10.0
+    budget: Budget = Budget(10.0)
     workers: int = 1
     seed: int = 0
     improve_only: bool = False  # every worker improves the hinted schedule (no proof is wanted)
@@ -88,7 +89,7 @@ def search(am: AllocationModel, limits: SearchLimits,
            progress: Callable[[Progress], None] | None = None) -> SearchOutcome:
     """Solve ``am`` within ``limits`` (see the module docstring)."""
     parameters = cmh.SatParameters()
-    parameters.max_time_in_seconds = limits.time_limit
+    limits.budget.limit(parameters, limits.workers)
     parameters.num_workers = limits.workers
     parameters.random_seed = limits.seed
     if len(am.model.proto.variables) > LARGE_MODEL:
@@ -104,8 +105,8 @@ def search(am: AllocationModel, limits: SearchLimits,
         response = run_solver(am.model.proto, accept=(OPTIMAL, FEASIBLE, INFEASIBLE), callback=watcher,
                               parameters=parameters, bound_callback=watcher.on_bound, what="the allocation")
     except IncompleteSolveError:
-        raise IncompleteSolveError(f"no schedule was found within the time limit of {limits.time_limit:g} s; "
-                                   "nothing is reported from an unfinished search: raise --time-limit") from None
+        raise IncompleteSolveError(f"no schedule was found within {limits.budget.describe()}; nothing is reported "
+                                   f"from an unfinished search: raise {limits.budget.option}") from None
     if response.status == INFEASIBLE:
         raise _no_allocation(am)
     return SearchOutcome("OPTIMAL" if response.status == OPTIMAL else "FEASIBLE",

@@ -27,6 +27,7 @@ from typing import Sequence
 from ..errors import MissionError
 from ..solve.decompose import DecompositionRequest
 from ..solve.optimize import CostModel
+from .budget import Budget
 from .improve import improve
 from .model import START, AllocationModel
 from .options import Objective
@@ -55,11 +56,11 @@ class WarmStart:
 
 
 def warm_start(problem: AllocationProblem, balanced: Sequence[list[str]] = (), objective: Objective = Objective(),
-               time_limit: float = 10.0, seed: int = 0, floor: float | None = None) -> WarmStart | None:
+               budget: Budget = Budget(10.0), seed: int = 0, floor: float | None = None) -> WarmStart | None:
     """The list schedule of the least-work decomposition or of one of ``balanced`` (the load
     relaxation's), whichever is best for ``objective`` once improved by local moves
-    (:mod:`.improve`): a quarter of ``time_limit`` shared by all, the rest for the best of
-    them, none once one reaches ``floor`` (a lower bound on the objective); None when there is
+    (:mod:`.improve`): a quarter of ``budget`` shared by all, the rest for the best of them,
+    none once one reaches ``floor`` (a lower bound on the objective); None when there is
     none."""
     started = time.perf_counter()
     candidates = [c for c in (*balanced, least_work_decomposition(problem))
@@ -68,14 +69,17 @@ def warm_start(problem: AllocationProblem, balanced: Sequence[list[str]] = (), o
     for number, chosen in enumerate(candidates):
         plan = greedy_plan(problem, chosen)
         if plan is not None:
-            share = (time_limit / 4 - (time.perf_counter() - started)) / (len(candidates) - number)
+            if budget.deterministic:
+                share = budget.part(0.25 / len(candidates))
+            else:
+                share = budget.part(0.25).after(started).part(1 / (len(candidates) - number))
             teams, start, value = improve(problem, chosen, *plan, objective, share, seed, floor)
             plans.append((value, len(plans), chosen, (teams, start)))
     plans.sort(key=lambda p: p[:2])
     if plans:
         _, _, chosen, plan = plans[0]
-        teams, start, value = improve(problem, chosen, *plan, objective, time_limit - (time.perf_counter() - started),
-                                      seed + 1, floor)
+        rest = budget.part(0.75) if budget.deterministic else budget.after(started)
+        teams, start, value = improve(problem, chosen, *plan, objective, rest, seed + 1, floor)
         plans[0] = (value, 0, chosen, (teams, start))
     for _, _, chosen, plan in plans:
         values = _decomposition_values(problem, set(chosen))
