@@ -110,6 +110,56 @@ def test_the_load_bound_counts_the_trip_between_tasks_of_the_same_robot(monkeypa
     assert with_trips.value > without.value
 
 
+def _one_fetcher(tmp_path: Path, staffed: bool) -> tuple[Path, Path]:
+    """Four deliveries in one building (no travel), for one all-rounder, three pickers and a
+    talker, with staff so slow to load an item that every robot fetches it itself; the robot
+    that fetches an item must also hand it over (an execution constraint).  To a person
+    (``staffed``) only the all-rounder can do both, and does all four deliveries one after the
+    other (200 s).  Otherwise the world does not say whether anyone is at the ward, so either
+    hand-over may be chosen, and into the drop box any picker can do both: the four deliveries
+    run side by side (40 s)."""
+    mission = tmp_path / f"one-fetcher-{staffed}"
+    shutil.copytree(DELIVERY, mission, ignore=shutil.ignore_patterns("output", "fleet.json"))
+    places = "".join(f"<Location><name>{name}</name><reachable>True</reachable>{staff}"
+                     f"<has_drop_box>{not staffed}</has_drop_box><x>0</x><y>0</y></Location>"
+                     for name, staff in (("Pharmacy", ""), ("Ward", "<staffed>True</staffed>" if staffed else "")))
+    deliveries = "".join(f"<Delivery><name>D{k}</name><item>Item {k}</item><pickup>Pharmacy</pickup>"
+                         "<destination>Ward</destination><is_collected>False</is_collected>"
+                         "<is_delivered>False</is_delivered></Delivery>" for k in range(1, 5))
+    (mission / "knowledge" / "world_db.xml").write_text(f"<world_db>{places}{deliveries}</world_db>\n")
+    fleet = json.loads(FLEET.read_text())
+    kinds = {"allrounder": ["manipulation", "communication"], "picker1": ["manipulation"],
+             "picker2": ["manipulation"], "picker3": ["manipulation"], "talker": ["communication"]}
+    fleet["robots"] = [{"name": name, "capabilities": ["navigation", *caps], "start": "Pharmacy"}
+                       for name, caps in kinds.items()]
+    fleet["durations"]["actions"]["request-loading"] = 400
+    del fleet["travel"]["coordinates"]
+    path = tmp_path / f"one-fetcher-{staffed}.json"
+    path.write_text(json.dumps(fleet))
+    return mission, path
+
+
+@pytest.mark.parametrize("staffed,optimum", [(True, 200), (False, 40)])
+def test_the_load_bound_puts_tasks_that_share_a_robot_on_the_robots_able_to_do_both(tmp_path, monkeypatch,
+                                                                                      staffed, optimum):
+    """Fetching needs a picker, handing over to a person a talker, and one robot must do both:
+    the pool of the robots able to do both (the all-rounder) carries the four deliveries, which
+    makes the bound the optimum, where fetches and hand-overs pooled apart spread over four
+    pickers and two talkers.  A fetch counts there only with a hand-over to a person: into a drop
+    box, any picker can do both."""
+    from mutrose_cp.allocate import load
+
+    mission_dir, fleet_path = _one_fetcher(tmp_path, staffed)
+    mission = Mission.load(*find_mission_files(mission_dir))
+    allocation = mission.allocate(Fleet.read(fleet_path), AllocationOptions(time_limit=60))
+    assert allocation.status == "OPTIMAL" and allocation.objective == optimum
+    assert allocation.load_value == optimum
+    problem = build_problem(mission.decomposition_model(), Fleet.read(fleet_path))  # the allocation's holds it
+    monkeypatch.setattr(load, "linked_candidates", lambda _problem: {})
+    apart = load_bound(problem, Objective(), Budget(10.0))
+    assert apart.value is not None and (apart.value < 100 if staffed else apart.value == optimum)
+
+
 def test_the_warm_start_passes_the_checker(tmp_path):
     for number, (mission_dir, fleet_path) in enumerate(_variants(tmp_path)):
         mission = Mission.load(*find_mission_files(mission_dir))

@@ -5,11 +5,13 @@ A second lower bound, independent of the search and cheap on large fleets where 
 start (:mod:`.warmstart`).  A small CP-SAT model on a copy of the decomposition model keeps the
 choice of decomposition exact and forgets which robot does what and when:
 
-* **pools**: for every set ``S`` of robots that is the candidate set of a job (or a union of
-  such sets), the jobs only robots of ``S`` can execute keep those robots busy for
-  ``duration * RobotNumber.min`` each, and every place where such a job is done must be reached
-  by one of them, at least at its *cheapest way in* for ``S`` (0 when one of them starts there);
-  all of that fits in ``|S| * makespan``;
+* **pools**: for every set ``S`` of robots that is the candidate set of a job, or the robots
+  able to do two jobs that must share their robots (or a union of such sets), the jobs only
+  robots of ``S`` can execute keep those robots busy for ``duration * RobotNumber.min`` each (a
+  job that must share its robots with a chosen job counts in the pool of the robots able to do
+  both), and every place where such a job is done must be reached by one of them, at least at
+  its *cheapest way in* for ``S`` (0 when one of them starts there); all of that fits in
+  ``|S| * makespan``;
 * **chains**: a job starts after the earliest arrival of an able robot and after its
   predecessors end, and, when a predecessor must be done by the same robots (an execution
   constraint), after their quickest trip from its place; it ends by the makespan;
@@ -109,9 +111,25 @@ def _solve(m: cp_model.CpModel, budget: Budget, workers: int, seed: int) -> cmh.
                       parameters=parameters, what="the load relaxation")
 
 
+def linked_candidates(problem: AllocationProblem) -> dict[str, dict[str, frozenset[str]]]:
+    """For each job, the robots able to do it together with each job it must share its robots
+    with (when both are chosen, its robots are among these), where they are fewer than its own
+    candidates."""
+    out: dict[str, dict[str, frozenset[str]]] = {}
+    for first, second in problem.same_robots:
+        a, b = problem.jobs[first], problem.jobs[second]
+        both = frozenset(a.candidates) & frozenset(b.candidates)
+        for job, partner in ((a, b), (b, a)):
+            if both and both < frozenset(job.candidates):
+                out.setdefault(job.id, {})[partner.id] = both
+    return out
+
+
 def pools(problem: AllocationProblem) -> list[frozenset[str]]:
-    """The candidate sets of the jobs and, while there are few, their unions (in a fixed order)."""
-    found = sorted({frozenset(j.candidates) for j in problem.jobs.values() if j.candidates}, key=sorted)
+    """The candidate sets of the jobs (alone and with the jobs they must share robots with)
+    and, while there are few, their unions (in a fixed order)."""
+    linked = {s for partners in linked_candidates(problem).values() for s in partners.values()}
+    found = sorted({frozenset(j.candidates) for j in problem.jobs.values() if j.candidates} | linked, key=sorted)
     closed = set(found)
     frontier = list(found)
     while frontier and len(closed) < MAX_POOLS:
@@ -125,15 +143,53 @@ def _pools(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, An
            ways: dict[str, dict[str, int]], makespan: cp_model.IntVar) -> None:
     """Each pool's work and ways in fit in ``|S| * makespan``."""
     robots = problem.robots
+    members = _PoolMembers(m, problem, chosen)
     for number, pool in enumerate(pools(problem)):
-        jobs = [j for j in problem.jobs.values() if j.candidates and set(j.candidates) <= pool]
-        if not jobs:
+        inside = members.of(pool, number)
+        if not inside:
             continue
-        work = cp_model.LinearExpr.weighted_sum([chosen[j.id] for j in jobs],
-                                                [j.duration * j.robots.min for j in jobs])
-        members = [robots[r] for r in sorted(pool)]
-        entered = _visits(m, problem, chosen, ways, members, f"pool{number}", jobs)
+        work = cp_model.LinearExpr.weighted_sum(
+            list(inside.values()), [problem.jobs[d].duration * problem.jobs[d].robots.min for d in inside])
+        entered = _visits(m, problem, inside, ways, [robots[r] for r in sorted(pool)], f"pool{number}",
+                          [problem.jobs[d] for d in inside])
         m.add(work + entered <= len(pool) * makespan)
+
+
+class _PoolMembers:
+    """Which chosen jobs keep a pool's robots busy: those only its robots can do, and those that
+    must share their robots with a chosen job such that only the pool's robots can do both (an
+    item fetched and handed over by one robot needs a robot that can do both)."""
+
+    def __init__(self, m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, Any]) -> None:
+        self.m = m
+        self.problem = problem
+        self.chosen = chosen
+        self.linked = linked_candidates(problem)
+        self.together: dict[tuple[str, str], Any] = {}
+
+    def of(self, pool: frozenset[str], number: int) -> dict[str, Any]:
+        """Job id -> the literal that puts its work in ``pool``."""
+        inside: dict[str, Any] = {}
+        for job in self.problem.jobs.values():
+            if job.candidates and set(job.candidates) <= pool:
+                inside[job.id] = self.chosen[job.id]
+                continue
+            pairs = [self._both(job.id, e) for e, both in self.linked.get(job.id, {}).items() if both <= pool]
+            if pairs:  # in the pool exactly when it is chosen with one of these partners
+                member = inside[job.id] = self.m.new_bool_var(f"in_pool[{number},{job.id}]")
+                self.m.add_bool_or(pairs).only_enforce_if(member)
+                for pair in pairs:
+                    self.m.add_implication(pair, member)
+        return inside
+
+    def _both(self, job: str, partner: str) -> Any:
+        """A literal true exactly when ``job`` and ``partner`` are both chosen."""
+        key = (min(job, partner), max(job, partner))
+        if key not in self.together:
+            both = self.together[key] = self.m.new_bool_var(f"together[{key[0]},{key[1]}]")
+            self.m.add_bool_and([self.chosen[job], self.chosen[partner]]).only_enforce_if(both)
+            self.m.add_bool_or([self.chosen[job].Not(), self.chosen[partner].Not(), both])
+        return self.together[key]
 
 
 def _visits(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, Any],
