@@ -240,12 +240,12 @@ def test_local_moves_shorten_the_list_schedule(tmp_path):
     the same schedule (the search stops on its own budget, not on the clock)."""
     mission, fleet_path, problem, chosen, plan = _listed(tmp_path, 12, 6)
     listed = max(plan[1][j] + problem.jobs[j].duration for j in chosen)
-    teams, start, value = improve(problem, chosen, *plan, Objective(), Budget(600.0))
+    teams, start, value = improve(problem, chosen, *plan, Objective(), Budget(600.0, 2.0))
     assert value == max(start[j] + problem.jobs[j].duration for j in chosen) < 0.9 * listed
     _check_plan(tmp_path, mission, fleet_path, problem, chosen, teams, start, "improved")
     evaluated = evaluate(problem, chosen, robot_sequences(problem, chosen, teams, start))
     assert evaluated is not None and evaluated.start == start
-    assert improve(problem, chosen, *plan, Objective(), Budget(600.0)) == (teams, start, value)
+    assert improve(problem, chosen, *plan, Objective(), Budget(600.0, 2.0)) == (teams, start, value)
 
 
 def test_orders_against_the_precedences_are_no_schedule(tmp_path):
@@ -289,15 +289,15 @@ def test_each_move_shortens_a_schedule_alone(tmp_path, monkeypatch, move):
     monkeypatch.setattr(local, "STALL", 1)  # one descent
     monkeypatch.setattr(local, "KICK", 0)
     monkeypatch.setattr(local, "MOVES", (local._relocations,))
-    teams, start, value = improve(problem, chosen, *plan, Objective(), Budget(600.0))
+    teams, start, value = improve(problem, chosen, *plan, Objective(), Budget(600.0, 2.0))
     if move != "_swaps":
         teams, start = _units_backwards(problem, chosen, teams, start)
         value = max(start[j] + problem.jobs[j].duration for j in chosen)
     monkeypatch.setattr(local, "MOVES", (getattr(local, move),))
-    better = improve(problem, chosen, teams, start, Objective(), Budget(600.0))
+    better = improve(problem, chosen, teams, start, Objective(), Budget(600.0, 2.0))
     assert better[2] < value
     _check_plan(tmp_path, mission, fleet_path, problem, chosen, *better[:2], move)
-    assert improve(problem, chosen, teams, start, Objective(), Budget(600.0)) == better
+    assert improve(problem, chosen, teams, start, Objective(), Budget(600.0, 2.0)) == better
 
 
 def test_a_work_limit_gives_the_same_schedule_on_a_slower_machine(tmp_path, monkeypatch):

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Callable
 if TYPE_CHECKING:
     from ..solve.native import cmh
 
-JOB_STEPS_PER_UNIT = 250_000  # job schedulings by the local moves' evaluator per unit of work
+JOB_STEPS_PER_UNIT = 500_000  # job schedulings by the local moves' evaluator per unit of work (about a second here)
 LP_ITERATIONS = 200  # Clarabel's iterations in a work budget (its default limit)
 
 

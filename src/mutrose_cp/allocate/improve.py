@@ -36,7 +36,7 @@ from .options import Objective
 from .problem import AllocationProblem
 from .schedule import chosen_predecessors, robot_sequences, robot_teams
 
-MAX_EVALUATIONS = 40_000  # schedules evaluated, at most
+MAX_EVALUATIONS = 1_000_000  # schedules evaluated, at most (a budget or STALL ends the search long before)
 KICK = 3  # units moved at random to leave a local optimum
 STALL = 200  # kicks without a better schedule, at most
 SEGMENT = 3  # jobs moved together within a robot's sequence, at most
