@@ -162,7 +162,35 @@ def test_the_finished_graph_knows_its_execution_constraint_edges_both_ways(refer
     tasks = [t.index for t in tg.tasks()]
     linked = {(t, p.task) for t in tasks for p in tg.ec_partners(t)}
     assert linked and not tg._edges.ec_pairs
+    refinements = {(e.source, e.target) for e in tg.edges() if e.kind != EdgeKind.EC}
     for a in tasks:
         for b in tasks:
-            assert tg.has_edge(a, b) == ((a, b) in linked or (a, b) in tg._edges.kind), (a, b)
+            assert tg.has_edge(a, b) == ((a, b) in linked or (a, b) in refinements), (a, b)
     assert all((b, a) in linked for a, b in linked)
+
+
+def test_the_finished_graph_answers_edge_queries_from_its_successor_lists():
+    """The builder looks edges up by vertex pair; the finished graph drops that table and reads
+    the successor lists: the same kinds, including an edge whose kind was changed, and a
+    vertex without successors answers with an empty sequence."""
+    from mutrose_cp.model.task_graph import TaskGraphBuilder
+
+    b = TaskGraphBuilder()
+    for i in range(4):
+        b.add(OperatorVertex(index=i, parent=-1 if i == 0 else 0, content="#"))
+    b.add_edge(0, 1, EdgeKind.AND)
+    b.add_edge(0, 2, EdgeKind.OR)
+    b.add_edge(0, 3, EdgeKind.AND)
+    b.add_edge(0, 1, EdgeKind.OR)  # changed in place: first among the successors, last among the OR ones
+    b.add_edge(2, 3, EdgeKind.CD)
+    building = [(a, c, b.edge_kind(a, c)) for a in range(4) for c in range(4) if b.has_edge(a, c)]
+    tg = b.freeze()
+    assert [(a, c, tg.edge_kind(a, c)) for a in range(4) for c in range(4) if tg.has_edge(a, c)] == building == [
+        (0, 1, EdgeKind.OR), (0, 2, EdgeKind.OR), (0, 3, EdgeKind.AND), (2, 3, EdgeKind.CD)]
+    assert list(tg.successors(0)) == [(1, EdgeKind.OR), (2, EdgeKind.OR), (3, EdgeKind.AND)]
+    assert tg.out(0, EdgeKind.OR) == [2, 1] and tg.out(0, EdgeKind.AND) == [3]
+    assert tg.children(0) == [1, 2, 3] and tg.children(2) == [] and list(tg.successors(3)) == []
+    assert tg.has_edges_of_kind(EdgeKind.CD) and not tg.has_edges_of_kind(EdgeKind.EC)
+    assert [(e.source, e.target, e.kind) for e in tg.edges()] == building
+    with pytest.raises(KeyError):
+        tg.edge_kind(1, 0)

@@ -134,15 +134,23 @@ class Edge(NamedTuple):
     divisible: bool = True
 
 
+_NO_SUCCESSORS: tuple[tuple[int, EdgeKind], ...] = ()  # shared by every vertex without AND, OR or CD edges
+
+
 @dataclass
 class _EdgeIndex:
     """The edges, indexed the ways the construction rules and the decomposers read them, in
     insertion order (which the original's traversals depend on).  Plain adjacency lists: large
-    missions have hundreds of thousands of EC edges."""
+    missions have hundreds of thousands of vertices and EC edges, so nothing is kept per vertex
+    or edge that a query can do without: no tuple keys, no empty lists."""
 
-    successors: dict[int, list[tuple[int, EdgeKind]]] = field(default_factory=dict)  # AND, OR, CD
-    by_kind: dict[tuple[int, EdgeKind], list[int]] = field(default_factory=dict)
-    kind: dict[tuple[int, int], EdgeKind] = field(default_factory=dict)
+    # AND, OR and CD successors by vertex index (most vertices, the decompositions, have none)
+    successors: list[list[tuple[int, EdgeKind]] | tuple[tuple[int, EdgeKind], ...]] = field(default_factory=list)
+    # kind -> vertex -> its successors through edges of that kind
+    by_kind: dict[EdgeKind, dict[int, list[int]]] = field(default_factory=lambda: {kind: {} for kind in EdgeKind})
+    # the kind of edge (a, b) as _pair(a, b), while building (the rules ask it for every new edge);
+    # the finished graph reads it from the successor lists
+    kind: dict[int, EdgeKind] | None = field(default_factory=dict)
     # execution constraints are symmetric and numerous: task -> partners, in the order added
     ec: dict[int, list[ExecutionPartner]] = field(default_factory=dict)
     ec_pairs: set[int] = field(default_factory=set)  # (a, b) as _pair(a, b): a third of a tuple's memory
@@ -163,33 +171,44 @@ class _Adjacency:
     def out(self, v: int, *kinds: EdgeKind) -> list[int]:
         """Successors of ``v`` through edges of the given kinds, in insertion order."""
         if len(kinds) == 1:
-            return self._edges.by_kind.get((v, kinds[0]), [])
+            return self._edges.by_kind[kinds[0]].get(v, [])
         return [u for u, k in self._edges.successors[v] if k in kinds]
 
     def children(self, v: int) -> list[int]:
         """AND/OR successors in insertion order (a vertex refines into one kind only)."""
-        ands = self._edges.by_kind.get((v, EdgeKind.AND))
-        ors = self._edges.by_kind.get((v, EdgeKind.OR))
+        by_kind = self._edges.by_kind
+        ands = by_kind[EdgeKind.AND].get(v)
+        ors = by_kind[EdgeKind.OR].get(v)
         if ands and ors:
             return self.out(v, EdgeKind.AND, EdgeKind.OR)
         return ands or ors or []
 
-    def successors(self, v: int) -> list[tuple[int, EdgeKind]]:
+    def successors(self, v: int) -> Sequence[tuple[int, EdgeKind]]:
         """AND, OR and CD successors of ``v`` with the edge kind, in insertion order."""
         return self._edges.successors[v]
 
     def is_or(self, v: int) -> bool:
         return any(k == EdgeKind.OR for _, k in self._edges.successors[v])
 
+    def _kind_of(self, a: int, b: int) -> EdgeKind | None:
+        """The kind of the AND, OR or CD edge ``(a, b)``, None without one."""
+        kinds = self._edges.kind
+        if kinds is not None:
+            return kinds.get(_pair(a, b))
+        return next((k for u, k in self._edges.successors[a] if u == b), None)
+
     def edge_kind(self, a: int, b: int) -> EdgeKind:
-        return self._edges.kind[(a, b)]
+        kind = self._kind_of(a, b)
+        if kind is None:
+            raise KeyError((a, b))
+        return kind
 
     def has_edges_of_kind(self, kind: EdgeKind) -> bool:
         """Whether any edge has ``kind`` (AND, OR or CD; EC edges are kept apart)."""
-        return any(k is kind for k in self._edges.kind.values())
+        return any(self._edges.by_kind[kind].values())
 
     def has_edge(self, a: int, b: int) -> bool:
-        if (a, b) in self._edges.kind:
+        if self._kind_of(a, b) is not None:
             return True
         if self._edges.ec_pairs:  # while building: every EC pair is kept as an int
             return _pair(a, b) in self._edges.ec_pairs
@@ -241,8 +260,8 @@ class TaskGraph(_Adjacency):
 
     def edges(self) -> Iterator[Edge]:
         """All edges (EC ones in both directions), by source vertex and then insertion order."""
-        for a in range(len(self.vertices)):
-            for b, kind in self._edges.successors[a]:
+        for a, successors in enumerate(self._edges.successors):
+            for b, kind in successors:
                 yield Edge(a, b, kind)
             for p in self._edges.ec.get(a, ()):
                 yield Edge(a, p.task, EdgeKind.EC, p.group, p.divisible)
@@ -268,7 +287,7 @@ class TaskGraphBuilder(_Adjacency):
         """Append ``vertex``, whose index must be :attr:`next_index`."""
         assert vertex.index == len(self.vertices), (vertex.index, len(self.vertices))
         self.vertices.append(vertex)
-        self._edges.successors[vertex.index] = []
+        self._edges.successors.append(_NO_SUCCESSORS)
         if isinstance(vertex, DecompositionVertex):
             self._edges.decompositions.setdefault(vertex.parent, []).append(vertex)
         return vertex
@@ -282,15 +301,22 @@ class TaskGraphBuilder(_Adjacency):
 
     def add_edge(self, a: int, b: int, kind: EdgeKind) -> None:
         """An AND, OR or CD edge; adding an existing edge again changes its kind in place."""
-        old = self._edges.kind.get((a, b))
+        edges = self._edges
+        assert edges.kind is not None, "a frozen graph's edges do not change"
+        pair = _pair(a, b)
+        old = edges.kind.get(pair)
         if old is None:
-            self._edges.successors[a].append((b, kind))
-            self._edges.by_kind.setdefault((a, kind), []).append(b)
+            successors = edges.successors[a]
+            if isinstance(successors, list):
+                successors.append((b, kind))
+            else:  # the vertex's first edge
+                edges.successors[a] = [(b, kind)]
+            edges.by_kind[kind].setdefault(a, []).append(b)
         elif old != kind:
-            self._edges.successors[a] = [(u, kind if u == b else k) for u, k in self._edges.successors[a]]
-            self._edges.by_kind[(a, old)].remove(b)
-            self._edges.by_kind.setdefault((a, kind), []).append(b)
-        self._edges.kind[(a, b)] = kind
+            edges.successors[a] = [(u, kind if u == b else k) for u, k in edges.successors[a]]
+            edges.by_kind[old][a].remove(b)
+            edges.by_kind[kind].setdefault(a, []).append(b)
+        edges.kind[pair] = kind
 
     def _partner(self, task: int, group: bool, divisible: bool) -> ExecutionPartner:
         """One shared partner record per (task, flags): a task appears in the partner list of
@@ -313,19 +339,22 @@ class TaskGraphBuilder(_Adjacency):
         in that order (one call for what is the bulk of a large mission's edges)."""
         edges = self._edges
         pairs, kinds, ec = edges.ec_pairs, edges.kind, edges.ec
+        assert kinds is not None, "a frozen graph's edges do not change"
         partner_v = self._partner(v, group, divisible)
         partners_of_v = ec.setdefault(v, [])
         for t in tasks:  # add_ec(t, v, ...) for each, inlined: a million calls on large missions
-            if t << 32 | v not in pairs and (t, v) not in kinds:
+            if t << 32 | v not in pairs and t << 32 | v not in kinds:
                 ec.setdefault(t, []).append(partner_v)
                 partners_of_v.append(self._partner(t, group, divisible))
                 pairs.add(t << 32 | v)
                 pairs.add(v << 32 | t)
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
-        """The finished graph.  The set of EC pairs, which only spares the construction rules a
-        look through partner lists, is dropped: on large missions it is the graph's largest
-        index (two ints per execution-constrained task pair)."""
+        """The finished graph.  The set of EC pairs and the kinds by vertex pair, which only
+        spare the construction rules a look through partner and successor lists, are dropped: on
+        large missions they are the graph's largest indexes (an int per execution-constrained
+        task pair and per edge)."""
         self._edges.ec_pairs = set()
+        self._edges.kind = None
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})
