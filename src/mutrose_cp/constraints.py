@@ -7,8 +7,11 @@ SEQ/FB links are trimmed, and EC partners must agree on robot numbers.
 """
 from __future__ import annotations
 
+import itertools
+from array import array
+from collections import Counter
 from enum import StrEnum
-from typing import NamedTuple
+from typing import Iterable, Iterator, NamedTuple, Sequence, overload
 
 from .errors import MissionError
 from .model.task_graph import EdgeKind, OperatorVertex, TaskGraph, TaskVertex
@@ -35,6 +38,86 @@ class Constraint(NamedTuple):
     group: bool = True
     divisible: bool = True
 
+
+_KINDS = tuple(ConstraintKind)  # a stored kind is its position here
+_KIND_CODE = {kind: code for code, kind in enumerate(_KINDS)}
+_GROUP = tuple(flag & 1 == 1 for flag in range(4))  # by the stored flags
+_DIVISIBLE = tuple(flag & 2 == 2 for flag in range(4))
+
+
+class Constraints(Sequence[Constraint]):
+    """The final constraint list, kept by column (kind, first, second, flags) instead of as a
+    million named tuples: at 5000 vital-signs rooms a tuple each took 110 MB, the columns take
+    10 MB.  Reading it (by index or by iterating) gives :class:`Constraint` tuples, made when
+    read; it equals any sequence of the same constraints, a list included."""
+
+    __slots__ = ("_kinds", "_firsts", "_seconds", "_flags")
+
+    def __init__(self, constraints: Iterable[Constraint] = ()) -> None:
+        self._kinds = bytearray()
+        self._firsts = array("i")  # vertex indices
+        self._seconds = array("i")
+        self._flags = bytearray()  # group | divisible << 1
+        self.extend(constraints)
+
+    def append(self, c: Constraint) -> None:
+        self._kinds.append(_KIND_CODE[c.kind])
+        self._firsts.append(c.first)
+        self._seconds.append(c.second)
+        self._flags.append(c.group | c.divisible << 1)
+
+    def extend(self, constraints: Iterable[Constraint]) -> None:
+        for c in constraints:
+            self.append(c)
+
+    def add_all_pairs(self, kind: ConstraintKind, firsts: Sequence[int], seconds: Sequence[int],
+                      group: bool = True, divisible: bool = True) -> None:
+        """``kind`` between every vertex of ``firsts`` and every vertex of ``seconds``, by first
+        vertex and then second (a task pair's constraints, expanded over their decompositions)."""
+        n = len(firsts) * len(seconds)
+        self._kinds.extend(bytes([_KIND_CODE[kind]]) * n)
+        for first in firsts:
+            self._firsts.extend(array("i", [first]) * len(seconds))
+            self._seconds.extend(array("i", seconds))
+        self._flags.extend(bytes([group | divisible << 1]) * n)
+
+    def __len__(self) -> int:
+        return len(self._kinds)
+
+    def count_by_kind(self) -> Counter[str]:
+        """How many constraints there are of each kind present (a summary's counts)."""
+        return Counter({str(_KINDS[code]): n for code, n in Counter(self._kinds).items()})
+
+    @overload
+    def __getitem__(self, i: int) -> Constraint: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> list[Constraint]: ...
+
+    def __getitem__(self, i: int | slice) -> Constraint | list[Constraint]:
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        flags = self._flags[i]
+        return Constraint(_KINDS[self._kinds[i]], self._firsts[i], self._seconds[i], flags & 1 == 1, flags & 2 == 2)
+
+    def __iter__(self) -> Iterator[Constraint]:
+        # the tuples are made by tuple.__new__ from zipped columns: no Python call per constraint
+        columns = zip(map(_KINDS.__getitem__, self._kinds), self._firsts, self._seconds,
+                      map(_GROUP.__getitem__, self._flags), map(_DIVISIBLE.__getitem__, self._flags))
+        return map(tuple.__new__, itertools.repeat(Constraint), columns)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Constraints):
+            return (self._kinds == other._kinds and self._firsts == other._firsts
+                    and self._seconds == other._seconds and self._flags == other._flags)
+        if isinstance(other, Sequence) and not isinstance(other, (str, bytes)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]  # it changes while it is built
+
+    def __repr__(self) -> str:
+        return f"Constraints({list(self)!r})"
 
 _Child = int | list[Constraint]  # a task vertex, or the constraint list of a subtree
 
@@ -140,11 +223,11 @@ def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint], decs: 
     return out
 
 
-def _execution_constraints(tg: TaskGraph, decs: _Decompositions) -> list[Constraint]:
-    """§6.3: one EC per decomposition pair of every EC-linked task pair.  The robot numbers of
-    each linked pair are checked here, once per task pair (§6.5): every decomposition pair of
-    it would fail alike, and the first failing pair is the first failing constraint."""
-    out: list[Constraint] = []
+def _execution_constraints(tg: TaskGraph, decs: _Decompositions, out: Constraints) -> None:
+    """§6.3: one EC per decomposition pair of every EC-linked task pair, added to ``out``.  The
+    robot numbers of each linked pair are checked here, once per task pair (§6.5): every
+    decomposition pair of it would fail alike, and the first failing pair is the first failing
+    constraint."""
     done: set[tuple[int, int]] = set()
     for s in (v.index for v in tg.tasks()):
         for t, group, divisible in tg.ec_partners(s):
@@ -153,8 +236,7 @@ def _execution_constraints(tg: TaskGraph, decs: _Decompositions) -> list[Constra
             done.add((s, t))
             if decs[s] and decs[t]:
                 _check_robot_numbers(tg, decs[s][0], decs[t][0])
-            out += [Constraint(EC, ds, dt, group, divisible) for ds in decs[s] for dt in decs[t]]
-    return out
+            out.add_all_pairs(EC, decs[s], decs[t], group, divisible)
 
 
 def _drop_implied(constraints: list[Constraint]) -> list[Constraint]:
@@ -203,7 +285,7 @@ def _check_robot_numbers(tg: TaskGraph, s: int, t: int) -> None:
         )
 
 
-def generate_constraints(tg: TaskGraph) -> list[Constraint]:
+def generate_constraints(tg: TaskGraph) -> Constraints:
     """The final constraint list over decomposition vertices, in the original's order."""
     out: list[Constraint] = []
     decs = _Decompositions(tg)
@@ -213,4 +295,6 @@ def generate_constraints(tg: TaskGraph) -> list[Constraint]:
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
         has_cd = tg.has_edges_of_kind(EdgeKind.CD)
         out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd), decs)
-    return _drop_implied(out) + _execution_constraints(tg, decs)
+    constraints = Constraints(_drop_implied(out))
+    _execution_constraints(tg, decs, constraints)
+    return constraints

@@ -122,7 +122,7 @@ class OutputModel:
     """Everything the writers need, with keys already assigned."""
 
     tg: TaskGraph
-    constraints: list[Constraint]
+    constraints: Sequence[Constraint]
     decompositions: Iterable[list[int]]  # valid mission decompositions (vertex indices)
     domain: Domain
     config: Configuration

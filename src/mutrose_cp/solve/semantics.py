@@ -105,7 +105,7 @@ class ConstraintIndex:
 
     @classmethod
     def of(cls, constraints: Iterable[Constraint]) -> "ConstraintIndex":
-        return cls(constraints if isinstance(constraints, (list, tuple)) else list(constraints))
+        return cls(constraints if isinstance(constraints, Sequence) else list(constraints))
 
     @property
     def ec(self) -> Mapping[int, tuple[int, ...]]:
