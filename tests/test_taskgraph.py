@@ -154,14 +154,14 @@ def test_group_false_tasks_need_exactly_one_robot(tmp_path: Path, robots, ok):
 
 
 def test_the_finished_graph_knows_its_execution_constraint_edges_both_ways(reference):
-    """The finished Task Graph drops the builder's set of EC pairs (its largest index on large
-    missions) and answers from the partner lists: the same answers, both directions."""
+    """The finished Task Graph answers from the partner lists (no set of linked pairs, the
+    largest index of a large mission): the same answers, both directions."""
     from mutrose_cp.mission import find_mission_files
 
     tg = Mission.load(*find_mission_files(reference / "missions" / "vital-signs-monitoring")).task_graph
     tasks = [t.index for t in tg.tasks()]
     linked = {(t, p.task) for t in tasks for p in tg.ec_partners(t)}
-    assert linked and not tg._edges.ec_pairs
+    assert linked
     refinements = {(e.source, e.target) for e in tg.edges() if e.kind != EdgeKind.EC}
     for a in tasks:
         for b in tasks:
@@ -194,3 +194,22 @@ def test_the_finished_graph_answers_edge_queries_from_its_successor_lists():
     assert [(e.source, e.target, e.kind) for e in tg.edges()] == building
     with pytest.raises(KeyError):
         tg.edge_kind(1, 0)
+
+
+def test_execution_constraints_link_a_task_pair_once():
+    """``add_ec_to_all`` skips the tasks already linked to the new one (in either direction, or
+    earlier in the same call) and keeps the order of the others, on both partner lists."""
+    from mutrose_cp.model.task_graph import ExecutionPartner, TaskGraphBuilder
+
+    b = TaskGraphBuilder()
+    b.add(OperatorVertex(index=0, parent=-1, content="#"))
+    for i in range(1, 6):
+        b.add(OperatorVertex(index=i, parent=0, content="#"))
+    b.add_ec(5, 2, True, False)
+    b.add_ec(3, 5, True, False)
+    b.add_ec_to_all([1, 2, 3, 4, 1, 4], 5, False, True)
+    assert [p.task for p in b.ec_partners(5)] == [2, 3, 1, 4]
+    assert b.ec_partners(1) == b.ec_partners(4) == [ExecutionPartner(5, False, True)]
+    assert b.ec_partners(2) == b.ec_partners(3) == [ExecutionPartner(5, True, False)]
+    tg = b.freeze()
+    assert [a for a in range(6) if tg.has_edge(a, 5)] == [1, 2, 3, 4] and not tg.has_edge(1, 4)

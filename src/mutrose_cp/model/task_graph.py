@@ -153,7 +153,6 @@ class _EdgeIndex:
     kind: dict[int, EdgeKind] | None = field(default_factory=dict)
     # execution constraints are symmetric and numerous: task -> partners, in the order added
     ec: dict[int, list[ExecutionPartner]] = field(default_factory=dict)
-    ec_pairs: set[int] = field(default_factory=set)  # (a, b) as _pair(a, b): a third of a tuple's memory
     decompositions: dict[int, list[DecompositionVertex]] = field(default_factory=dict)  # by task
 
 
@@ -210,9 +209,7 @@ class _Adjacency:
     def has_edge(self, a: int, b: int) -> bool:
         if self._kind_of(a, b) is not None:
             return True
-        if self._edges.ec_pairs:  # while building: every EC pair is kept as an int
-            return _pair(a, b) in self._edges.ec_pairs
-        return any(p.task == b for p in self._edges.ec.get(a, ()))  # frozen: the partner list
+        return any(p.task == b for p in self._edges.ec.get(a, ()))
 
     def ec_partners(self, v: int) -> list[ExecutionPartner]:
         """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
@@ -331,30 +328,27 @@ class TaskGraphBuilder(_Adjacency):
         """An execution constraint between task vertices ``a`` and ``b`` (both directions)."""
         self._edges.ec.setdefault(a, []).append(self._partner(b, group, divisible))
         self._edges.ec.setdefault(b, []).append(self._partner(a, group, divisible))
-        self._edges.ec_pairs.add(_pair(a, b))
-        self._edges.ec_pairs.add(_pair(b, a))
 
     def add_ec_to_all(self, tasks: Sequence[int], v: int, group: bool, divisible: bool) -> None:
         """Execution constraints between task ``v`` and each of ``tasks`` it is not yet linked to,
-        in that order (one call for what is the bulk of a large mission's edges)."""
+        in that order (one call for what is the bulk of a large mission's edges).  Which tasks
+        ``v`` is linked to is read from its partner list, once per call: a set of every linked
+        pair, kept while building, was the largest index of a large mission's construction."""
         edges = self._edges
-        pairs, kinds, ec = edges.ec_pairs, edges.kind, edges.ec
+        kinds, ec = edges.kind, edges.ec
         assert kinds is not None, "a frozen graph's edges do not change"
         partner_v = self._partner(v, group, divisible)
         partners_of_v = ec.setdefault(v, [])
+        linked = {p.task for p in partners_of_v}
         for t in tasks:  # add_ec(t, v, ...) for each, inlined: a million calls on large missions
-            if t << 32 | v not in pairs and t << 32 | v not in kinds:
+            if t not in linked and t << 32 | v not in kinds:
                 ec.setdefault(t, []).append(partner_v)
                 partners_of_v.append(self._partner(t, group, divisible))
-                pairs.add(t << 32 | v)
-                pairs.add(v << 32 | t)
+                linked.add(t)
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
-        """The finished graph.  The set of EC pairs and the kinds by vertex pair, which only
-        spare the construction rules a look through partner and successor lists, are dropped: on
-        large missions they are the graph's largest indexes (an int per execution-constrained
-        task pair and per edge)."""
-        self._edges.ec_pairs = set()
+        """The finished graph.  The kinds by vertex pair, which only spare the construction
+        rules a look through the successor lists, are dropped (an int per edge)."""
         self._edges.kind = None
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})
