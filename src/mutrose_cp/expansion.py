@@ -214,22 +214,24 @@ class _Walker:
         if node.or_decomposed and annotation.op in (";", "FALLBACK"):
             kind = "sequential" if annotation.op == ";" else "fallback"
             raise MissionError(f"OR decomposed goal cannot have {kind} runtime annotations", self._where(node))
-        queue = list(children)
+        return self._annotation_node(annotation, False, node, depth, list(children), snapshot)
 
-        def build(a: Annotation, inner: bool) -> RatNode:
-            if isinstance(a, AnnotationLeaf):
-                if not queue:
-                    raise MissionError(
-                        f"runtime annotation names more children than the goal has ({a.name})", self._where(node)
-                    )
-                return self.walk(queue.pop(0), depth + 1)
-            op = RatNode(OPERATOR, a.op, node.key, [], group=node.group, divisible=node.divisible,
-                         or_decomposition=node.or_decomposed, var_maps=snapshot, inner=inner)
-            for c in a.children:
-                op.children.append(build(c, True))
-            return op
-
-        return build(annotation, False)
+    def _annotation_node(self, a: Annotation, inner: bool, node: GMNode, depth: int, queue: list[GMNode],
+                         snapshot: Mapping[str, Binding]) -> RatNode:
+        """The node of annotation ``a`` of ``node``'s goal; its leaves take the goal's children
+        from ``queue`` in order.  (A method rather than a recursive closure: such a closure is a
+        reference cycle, which the paused cyclic collector never frees, one per goal.)"""
+        if isinstance(a, AnnotationLeaf):
+            if not queue:
+                raise MissionError(
+                    f"runtime annotation names more children than the goal has ({a.name})", self._where(node)
+                )
+            return self.walk(queue.pop(0), depth + 1)
+        op = RatNode(OPERATOR, a.op, node.key, [], group=node.group, divisible=node.divisible,
+                     or_decomposition=node.or_decomposed, var_maps=snapshot, inner=inner)
+        for c in a.children:
+            op.children.append(self._annotation_node(c, True, node, depth, queue, snapshot))
+        return op
 
     def _task(self, node: GMNode) -> RatNode:
         name = node.task_name or ""
