@@ -265,3 +265,19 @@ def test_the_expansion_leaves_no_reference_cycles(example):
     finally:
         if collecting:
             gc.enable()
+
+
+def test_instances_of_a_task_share_its_inferred_robot_number(reference):
+    """Without ``RobotNumber``, a task's robot number is inferred from its parameters, once per
+    abstract task: its instances (thousands on large missions) share the one record."""
+    from mutrose_cp.expansion import infer_robot_number
+    from mutrose_cp.mission import Mission, find_mission_files
+
+    mission = Mission.load(*find_mission_files(reference / "missions" / "vital-signs-monitoring"))
+    by_task: dict[str, list] = {}
+    for inst in mission.expansion.instances:
+        if mission.goal_model.node(inst.gm_task).robot_number is None:
+            by_task.setdefault(inst.name, []).append(inst.robot_number)
+    assert any(len(numbers) > 1 for numbers in by_task.values())
+    for name, numbers in by_task.items():
+        assert all(n is numbers[0] for n in numbers) and numbers[0] == infer_robot_number(mission.domain, name)

@@ -98,6 +98,7 @@ class _Walker:
         self.counters: dict[int, int] = {}  # depth -> current forAll index (1-based)
         self.events: dict[int, str] = {}  # depth -> trigger event text
         self.instances: list[TaskInstance] = []
+        self._robot_numbers: dict[str, RobotNumber] = {}  # inferred, by abstract task
         self.var_mapping: dict[str, list[tuple[str, str]]] = {}
         for vm in config.var_mapping:
             self.var_mapping.setdefault(vm.task_id, []).extend(vm.pairs)
@@ -107,6 +108,14 @@ class _Walker:
                 self.declared_types.setdefault(d.name, d.type)
 
     # -- helpers -----------------------------------------------------------------------------
+    def _inferred_robot_number(self, task_name: str) -> RobotNumber:
+        """:func:`infer_robot_number`, once per abstract task: its instances share the value
+        (thousands of equal records otherwise)."""
+        robots = self._robot_numbers.get(task_name)
+        if robots is None:
+            robots = self._robot_numbers[task_name] = infer_robot_number(self.domain, task_name)
+        return robots
+
     def _enter(self, depth: int) -> None:
         for d in [d for d in self.counters if d >= depth]:
             del self.counters[d]
@@ -239,7 +248,7 @@ class _Walker:
             raise MissionError(f"Could not find AT [{name}] in HDDL Domain definition.", self._where(node))
         suffix = "".join(f"_{self.counters[d]}" for d in sorted(self.counters)) or "_1"
         inst_id = f"{node.id}{suffix}"
-        robots = node.robot_number or infer_robot_number(self.domain, name)
+        robots = node.robot_number or self._inferred_robot_number(name)
         location: Value | None = None
         mapping = self.var_mapping.get(node.id, [])
         params: list[ParameterValue] = []
