@@ -162,3 +162,13 @@ def test_the_constraint_list_reads_back_as_the_tuples_it_was_given():
     assert stored.count_by_kind() == {"SEQ": 1, "FB": 1, "EC": 3}
     stored.add_all_pairs(EC, [5, 6], [8, 9, 10], False, True)
     assert list(stored)[5:] == [Constraint(EC, a, b, False, True) for a in (5, 6) for b in (8, 9, 10)]
+
+
+def test_implied_constraints_are_found_through_short_and_long_neighbour_lists():
+    """Dropping implied constraints asks whether two neighbour lists share a vertex: scanned when
+    both are short, through a set when they are long; absent lists share nothing."""
+    from mutrose_cp.constraints import _meet
+
+    assert _meet([1, 2], [3, 2]) and not _meet([1, 2], [3, 4])
+    assert _meet(list(range(100)), [500, 99]) and not _meet(list(range(100)), list(range(100, 200)))
+    assert not _meet(None, [1]) and not _meet([1], None) and not _meet([], [])
