@@ -346,6 +346,15 @@ class TaskGraphBuilder(_Adjacency):
                 partners_of_v.append(self._partner(t, group, divisible))
                 linked.add(t)
 
+    def release_lookups(self) -> None:
+        """Drop the indexes that look edges up (by kind, by vertex pair, decompositions by
+        task), keeping the vertices and their successor lists, for a graph that is only walked
+        from now on: the untrimmed graph, walked once more for its execution constraints while
+        the trimmed one takes them.  It takes no more edges."""
+        self._edges.by_kind = {kind: {} for kind in EdgeKind}
+        self._edges.kind = None
+        self._edges.decompositions = {}
+
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
         """The finished graph.  The kinds by vertex pair, which only spare the construction
         rules a look through the successor lists, are dropped (an int per edge)."""
