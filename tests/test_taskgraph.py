@@ -213,3 +213,31 @@ def test_execution_constraints_link_a_task_pair_once():
     assert b.ec_partners(2) == b.ec_partners(3) == [ExecutionPartner(5, True, False)]
     tg = b.freeze()
     assert [a for a in range(6) if tg.has_edge(a, 5)] == [1, 2, 3, 4] and not tg.has_edge(1, 4)
+
+
+def test_successors_of_one_kind_read_like_a_list_of_pairs_once_frozen():
+    """A finished graph reads the successors of a vertex whose edges all have one kind from its
+    list by kind: the same pairs in the same order, by index, slice or iteration; a vertex with
+    edges of two kinds, or an edge whose kind was changed out of order, keeps its list."""
+    from mutrose_cp.model.task_graph import TaskGraphBuilder
+
+    b = TaskGraphBuilder()
+    for i in range(6):
+        b.add(OperatorVertex(index=i, parent=-1 if i == 0 else 0, content="#"))
+    b.add_edge(0, 1, EdgeKind.OR)
+    b.add_edge(0, 2, EdgeKind.OR)
+    b.add_edge(1, 3, EdgeKind.AND)
+    b.add_edge(1, 4, EdgeKind.CD)
+    b.add_edge(2, 4, EdgeKind.AND)
+    b.add_edge(2, 5, EdgeKind.OR)
+    b.add_edge(2, 4, EdgeKind.OR)  # all OR now, but 4 comes after 5 among the OR successors
+    expected = {v: list(b.successors(v)) for v in range(6)}
+    tg = b.freeze()
+    for v in range(6):
+        successors = tg.successors(v)
+        assert successors == expected[v] and list(successors) == expected[v] and len(successors) == len(expected[v])
+        assert [successors[i] for i in range(len(successors))] == expected[v] and successors[1:] == expected[v][1:]
+    assert expected[0] == [(1, EdgeKind.OR), (2, EdgeKind.OR)] and expected[2] == [(4, EdgeKind.OR), (5, EdgeKind.OR)]
+    assert tg.out(2, EdgeKind.OR) == [5, 4] and tg.children(2) == [5, 4]
+    assert [v for v in range(6) if tg.is_or(v)] == [0, 2]
+    assert type(tg.successors(0)) is not list and type(tg.successors(1)) is list and type(tg.successors(2)) is list

@@ -9,10 +9,11 @@ constraints (EC).  A vertex's ``index`` is its position, which fixes the output 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from dataclasses import dataclass, field
 from operator import attrgetter
 from enum import StrEnum
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence, overload
 
 if TYPE_CHECKING:  # the types of the stages that produce a vertex's content
     from ..conditions import Test
@@ -134,7 +135,62 @@ class Edge(NamedTuple):
     divisible: bool = True
 
 
-_NO_SUCCESSORS: tuple[tuple[int, EdgeKind], ...] = ()  # shared by every vertex without AND, OR or CD edges
+class _SameKind(Sequence[tuple[int, EdgeKind]]):
+    """The successors of a finished graph's vertex whose edges all have one kind: its list of
+    successors by that kind, read as (successor, kind) pairs.  Most vertices with successors
+    are such; a list of pairs each took four times the memory."""
+
+    __slots__ = ("targets", "kind")
+
+    def __init__(self, targets: list[int], kind: EdgeKind) -> None:
+        self.targets = targets
+        self.kind = kind
+
+    def __len__(self) -> int:
+        return len(self.targets)
+
+    @overload
+    def __getitem__(self, i: int) -> tuple[int, EdgeKind]: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> list[tuple[int, EdgeKind]]: ...
+
+    def __getitem__(self, i: int | slice) -> tuple[int, EdgeKind] | list[tuple[int, EdgeKind]]:
+        if isinstance(i, slice):
+            return [(t, self.kind) for t in self.targets[i]]
+        return self.targets[i], self.kind
+
+    def __iter__(self) -> Iterator[tuple[int, EdgeKind]]:
+        return zip(self.targets, itertools.repeat(self.kind))
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Sequence) and not isinstance(other, (str, bytes)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return repr(list(self))
+
+
+# shared by every vertex without AND, OR or CD edges (never changed: a first edge replaces it)
+_NO_SUCCESSORS = _SameKind([], EdgeKind.AND)
+
+
+def _same_kind(successors: Sequence[tuple[int, EdgeKind]],
+               by_kind: Mapping[EdgeKind, Mapping[int, list[int]]], v: int) -> _SameKind | None:
+    """``successors`` of ``v`` as its list by kind, when they all have one kind and that list
+    holds them in the same order (an edge whose kind was changed can stand elsewhere there)."""
+    if not successors:
+        return None
+    kind = successors[0][1]
+    targets = by_kind[kind].get(v)
+    if targets is None or len(targets) != len(successors):
+        return None
+    if any(k is not kind or t != b for t, (b, k) in zip(targets, successors)):
+        return None
+    return _SameKind(targets, kind)
 
 
 @dataclass
@@ -145,7 +201,8 @@ class _EdgeIndex:
     or edge that a query can do without: no tuple keys, no empty lists."""
 
     # AND, OR and CD successors by vertex index (most vertices, the decompositions, have none)
-    successors: list[list[tuple[int, EdgeKind]] | tuple[tuple[int, EdgeKind], ...]] = field(default_factory=list)
+    # (once frozen, those of one kind are read from ``by_kind``: _SameKind)
+    successors: list[Sequence[tuple[int, EdgeKind]]] = field(default_factory=list)
     # kind -> vertex -> its successors through edges of that kind
     by_kind: dict[EdgeKind, dict[int, list[int]]] = field(default_factory=lambda: {kind: {} for kind in EdgeKind})
     # the kind of edge (a, b) as _pair(a, b), while building (the rules ask it for every new edge);
@@ -187,7 +244,10 @@ class _Adjacency:
         return self._edges.successors[v]
 
     def is_or(self, v: int) -> bool:
-        return any(k == EdgeKind.OR for _, k in self._edges.successors[v])
+        successors = self._edges.successors[v]
+        if isinstance(successors, _SameKind):
+            return successors.kind == EdgeKind.OR
+        return any(k == EdgeKind.OR for _, k in successors)
 
     def _kind_of(self, a: int, b: int) -> EdgeKind | None:
         """The kind of the AND, OR or CD edge ``(a, b)``, None without one."""
@@ -357,7 +417,13 @@ class TaskGraphBuilder(_Adjacency):
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
         """The finished graph.  The kinds by vertex pair, which only spare the construction
-        rules a look through the successor lists, are dropped (an int per edge)."""
-        self._edges.kind = None
+        rules a look through the successor lists, are dropped (an int per edge), and the
+        successors of one kind are read from the lists by kind."""
+        edges = self._edges
+        edges.kind = None
+        for v, successors in enumerate(edges.successors):
+            same = _same_kind(successors, edges.by_kind, v)
+            if same is not None:
+                edges.successors[v] = same
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})
