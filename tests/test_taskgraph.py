@@ -241,3 +241,14 @@ def test_successors_of_one_kind_read_like_a_list_of_pairs_once_frozen():
     assert tg.out(2, EdgeKind.OR) == [5, 4] and tg.children(2) == [5, 4]
     assert [v for v in range(6) if tg.is_or(v)] == [0, 2]
     assert type(tg.successors(0)) is not list and type(tg.successors(1)) is list and type(tg.successors(2)) is list
+
+
+def test_decomposition_keys_number_the_decompositions_in_vertex_order():
+    """The output keys ``t0, t1, ...`` follow the decomposition vertices in index order, built
+    once for everything that names them."""
+    from mutrose_cp.mission import find_mission_files
+
+    tg = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / "item-delivery")).task_graph
+    keys = tg.decomposition_keys
+    assert list(keys) == [d.index for d in tg.decompositions()] == sorted(keys)
+    assert list(keys.values()) == [f"t{i}" for i in range(len(keys))] and tg.decomposition_keys is keys

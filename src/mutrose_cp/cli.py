@@ -310,7 +310,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     with phase("solving"):
         result = mission.decompose(request, progress)
     decompositions, total = result.decompositions, result.total
-    key = {d.index: f"t{i}" for i, d in enumerate(tg.decompositions())}
+    key = tg.decomposition_keys
     section = result.space_section(key.__getitem__)
     note = _note(request, result)
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,

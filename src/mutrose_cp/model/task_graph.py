@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from dataclasses import dataclass, field
+from functools import cached_property
 from operator import attrgetter
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence, overload
@@ -314,6 +315,12 @@ class TaskGraph(_Adjacency):
     # achieve goals that trimming removed (means-end goals, single-child chains above the root),
     # by the kept vertex that now stands for their subtree: their conditions are checked there
     achieve_carried: Mapping[int, tuple[ScopeVertex, ...]] = field(default_factory=dict)
+
+    @cached_property
+    def decomposition_keys(self) -> dict[int, str]:
+        """Decomposition vertex -> its output key, ``t0, t1, ...`` in vertex order; built once,
+        for the output, its space section and the views that name the decompositions alike."""
+        return {d.index: f"t{i}" for i, d in enumerate(self.decompositions())}
 
     def edges(self) -> Iterator[Edge]:
         """All edges (EC ones in both directions), by source vertex and then insertion order."""
