@@ -57,9 +57,10 @@ LAYERED_LIST_LIMIT = 10_000
 # Components
 
 
-@dataclass
+@dataclass(slots=True)
 class Component:
-    """An independent part of the decomposition space."""
+    """An independent part of the decomposition space (slots: a large mission has tens of
+    thousands, one per forAll instance and task at least)."""
 
     records: list[Record]
     choice_vars: list[int]  # decomposition literals of the component (positive var ids)
@@ -79,7 +80,11 @@ def _components(enc: Encoding) -> list[Component]:
             if not (isinstance(r, Exactly) and r.target is FALSE):
                 constant.append(Component([r], [], solutions=[], count=0))
             continue
-        groups.setdefault(find(vs[0]), Component([], [])).records.append(r)
+        root = find(vs[0])
+        group = groups.get(root)
+        if group is None:
+            group = groups[root] = Component([], [])
+        group.records.append(r)
     dec_var = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
     for var in sorted(dec_var):
         root = find(var)
