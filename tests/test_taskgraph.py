@@ -252,3 +252,29 @@ def test_decomposition_keys_number_the_decompositions_in_vertex_order():
     keys = tg.decomposition_keys
     assert list(keys) == [d.index for d in tg.decompositions()] == sorted(keys)
     assert list(keys.values()) == [f"t{i}" for i in range(len(keys))] and tg.decomposition_keys is keys
+
+
+def test_the_finished_graph_reads_a_tasks_decompositions_from_its_and_successors():
+    """When every task's decompositions are its AND successors, in order, the finished graph
+    reads them from there (no list per task); otherwise it keeps the lists.  Both answer alike."""
+    from mutrose_cp.mission import find_mission_files
+    from mutrose_cp.model.task_graph import DecompositionVertex, TaskGraphBuilder, TaskVertex
+
+    tg = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / "item-delivery")).task_graph
+    assert tg._edges.decompositions is None
+    for v in tg.vertices:
+        expected = [d for d in tg.vertices if isinstance(d, DecompositionVertex) and d.parent == v.index]
+        assert tg.decompositions_of(v.index) == expected
+    assert tg.decompositions_of(-1) == [] and tg.decompositions_of(len(tg.vertices)) == []
+
+    b = TaskGraphBuilder()
+    b.add(OperatorVertex(index=0, parent=-1, content="#"))
+    task = tg.vertices[next(t.index for t in tg.tasks())]
+    b.add(TaskVertex(index=1, parent=0, content=task.content, instance=task.instance))
+    dec = tg.decompositions_of(task.index)[0]
+    first = b.add(DecompositionVertex(index=2, parent=1, content=dec.content, decomposition=dec.decomposition))
+    b.add(DecompositionVertex(index=3, parent=1, content=dec.content, decomposition=dec.decomposition))
+    b.add_edge(1, 2, EdgeKind.AND)  # the second decomposition has no edge: the lists are kept
+    kept = b.freeze()
+    assert kept._edges.decompositions is not None and [d.index for d in kept.decompositions_of(1)] == [2, 3]
+    assert kept.decompositions_of(1)[0] is first

@@ -211,7 +211,24 @@ class _EdgeIndex:
     kind: dict[int, EdgeKind] | None = field(default_factory=dict)
     # execution constraints are symmetric and numerous: task -> partners, in the order added
     ec: dict[int, list[ExecutionPartner]] = field(default_factory=dict)
-    decompositions: dict[int, list[DecompositionVertex]] = field(default_factory=dict)  # by task
+    # by task; None once frozen when every task's decompositions are its AND successors, in order
+    decompositions: dict[int, list[DecompositionVertex]] | None = field(default_factory=dict)
+
+
+def _decompositions_are_and_successors(vertices: Sequence[Vertex], edges: _EdgeIndex) -> bool:
+    """Whether the decompositions of each task are its AND successors, in the same order, and
+    only tasks have decompositions: then a finished graph reads them from there instead of
+    keeping a list per task."""
+    by_task, ands = edges.decompositions, edges.by_kind[EdgeKind.AND]
+    if by_task is None or not all(0 <= t < len(vertices) and isinstance(vertices[t], TaskVertex) for t in by_task):
+        return False
+    for vertex in vertices:
+        if isinstance(vertex, TaskVertex):
+            listed = by_task.get(vertex.index, [])
+            successors = ands.get(vertex.index, [])
+            if len(listed) != len(successors) or any(d is not vertices[s] for d, s in zip(listed, successors)):
+                return False
+    return True
 
 
 def _pair(a: int, b: int) -> int:
@@ -277,7 +294,12 @@ class _Adjacency:
         return self._edges.ec.get(v, [])
 
     def decompositions_of(self, task: int) -> list[DecompositionVertex]:
-        return self._edges.decompositions.get(task, [])
+        by_task = self._edges.decompositions
+        if by_task is not None:
+            return by_task.get(task, [])
+        if not 0 <= task < len(self.vertices) or not isinstance(self.vertices[task], TaskVertex):
+            return []
+        return [self.decomposition(d) for d in self._edges.by_kind[EdgeKind.AND].get(task, ())]
 
     def decompositions(self) -> list[DecompositionVertex]:
         return [v for v in self.vertices if isinstance(v, DecompositionVertex)]
@@ -353,13 +375,17 @@ class TaskGraphBuilder(_Adjacency):
         self.vertices.append(vertex)
         self._edges.successors.append(_NO_SUCCESSORS)
         if isinstance(vertex, DecompositionVertex):
-            self._edges.decompositions.setdefault(vertex.parent, []).append(vertex)
+            by_task = self._edges.decompositions
+            assert by_task is not None, "a frozen graph takes no vertices"
+            by_task.setdefault(vertex.parent, []).append(vertex)
         return vertex
 
     def replace(self, vertex: DecompositionVertex) -> None:
         """Put a changed decomposition vertex in place of the one with its index."""
         old = self.decomposition(vertex.index)
-        siblings = self._edges.decompositions[old.parent]
+        by_task = self._edges.decompositions
+        assert by_task is not None, "a frozen graph's vertices do not change"
+        siblings = by_task[old.parent]
         siblings[siblings.index(old)] = vertex
         self.vertices[vertex.index] = vertex
 
@@ -432,5 +458,7 @@ class TaskGraphBuilder(_Adjacency):
             same = _same_kind(successors, edges.by_kind, v)
             if same is not None:
                 edges.successors[v] = same
+        if _decompositions_are_and_successors(self.vertices, edges):
+            edges.decompositions = None
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})
