@@ -143,3 +143,32 @@ def test_robot_numbers_of_execution_constrained_tasks(tmp_path, first, second, o
         with pytest.raises(MissionError, match=r"Wrong robot number for execution constrained tasks "
                                                r"\[AT1_1\|1\] and \[AT2_1\|1\]"):
             _ = mission.constraints
+
+
+def test_the_constraint_list_reads_back_as_the_tuples_it_was_given():
+    """The final list is kept by column; reading it back (iterating, by index, by slice) gives
+    the same named tuples with the same kinds and flags, and it equals a list of them."""
+    from mutrose_cp.constraints import EC, FB, SEQ, Constraint, Constraints
+
+    given = [Constraint(SEQ, 3, 7), Constraint(FB, 7, 2), Constraint(EC, 4, 9, False, True),
+             Constraint(EC, 9, 4, True, False), Constraint(EC, 1, 2, False, False)]
+    stored = Constraints(given)
+    assert list(stored) == given and stored == given and given == stored and stored == Constraints(given)
+    assert [stored[i] for i in range(-5, 5)] == given + given and stored[1:4] == given[1:4]
+    assert all(type(c) is Constraint and type(c.kind) is type(SEQ) for c in stored)
+    assert [(c.group, c.divisible) for c in stored] == [(True, True), (True, True), (False, True), (True, False),
+                                                        (False, False)]
+    assert stored != given[:4] and stored != [*given[:4], Constraint(EC, 1, 2)]
+    assert stored.count_by_kind() == {"SEQ": 1, "FB": 1, "EC": 3}
+    stored.add_all_pairs(EC, [5, 6], [8, 9, 10], False, True)
+    assert list(stored)[5:] == [Constraint(EC, a, b, False, True) for a in (5, 6) for b in (8, 9, 10)]
+
+
+def test_implied_constraints_are_found_through_short_and_long_neighbour_lists():
+    """Dropping implied constraints asks whether two neighbour lists share a vertex: scanned when
+    both are short, through a set when they are long; absent lists share nothing."""
+    from mutrose_cp.constraints import _meet
+
+    assert _meet([1, 2], [3, 2]) and not _meet([1, 2], [3, 4])
+    assert _meet(list(range(100)), [500, 99]) and not _meet(list(range(100)), list(range(100, 200)))
+    assert not _meet(None, [1]) and not _meet([1], None) and not _meet([], [])

@@ -244,3 +244,40 @@ def test_expand_refuses_ordered_or_alternatives(tmp_path, op, kind):
     world = load_knowledge(config.world_db.path, config.world_db.xml_root, config.world_db.unique_id)
     with pytest.raises(MissionError, match=f"OR decomposed goal cannot have {kind} runtime annotations"):
         expand(load_goal_model(gm_path), load_domain(hddl), config, world)
+
+
+@pytest.mark.parametrize("example", ["hospital-disinfection", "item-delivery"])
+def test_the_expansion_leaves_no_reference_cycles(example):
+    """The command line pauses the cyclic collector, so whatever the walk left in reference
+    cycles would stay until the process ends (on large missions, one per goal with children).
+    The walk leaves none: nothing is unreachable after it."""
+    import gc
+
+    from mutrose_cp.mission import Mission, find_mission_files
+
+    mission = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / example))
+    collecting = gc.isenabled()
+    gc.collect()
+    gc.disable()
+    try:
+        assert mission.expansion.instances
+        assert gc.collect() == 0
+    finally:
+        if collecting:
+            gc.enable()
+
+
+def test_instances_of_a_task_share_its_inferred_robot_number(reference):
+    """Without ``RobotNumber``, a task's robot number is inferred from its parameters, once per
+    abstract task: its instances (thousands on large missions) share the one record."""
+    from mutrose_cp.expansion import infer_robot_number
+    from mutrose_cp.mission import Mission, find_mission_files
+
+    mission = Mission.load(*find_mission_files(reference / "missions" / "vital-signs-monitoring"))
+    by_task: dict[str, list] = {}
+    for inst in mission.expansion.instances:
+        if mission.goal_model.node(inst.gm_task).robot_number is None:
+            by_task.setdefault(inst.name, []).append(inst.robot_number)
+    assert any(len(numbers) > 1 for numbers in by_task.values())
+    for name, numbers in by_task.items():
+        assert all(n is numbers[0] for n in numbers) and numbers[0] == infer_robot_number(mission.domain, name)

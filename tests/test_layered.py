@@ -243,3 +243,14 @@ def test_written_graph_stands_for_every_solution():
     assert any(edge["count"] == "2" for block in written["blocks"] for edge in block)
     # after the first task: its choice to keep the door (its own literal's block needs it), the door
     assert sorted(written["states"][1]) == [["t0keep=0", "door0=0"], ["t0keep=0", "door0=1"], ["t0keep=1", "door0=0"]]
+
+
+def test_listed_solutions_read_as_sorted_decomposition_vertices():
+    """A listed component's solutions (decomposition literals) read as their sorted
+    decomposition vertices, again on every pass, with the least and greatest vertex of any."""
+    from mutrose_cp.solve.cpsat import Listed
+
+    listed = Listed([frozenset({1, 2}), frozenset({3})], {1: 40, 2: 7, 3: 12})
+    assert list(listed) == [(7, 40), (12,)] == list(listed) and listed.first() == (7, 40)
+    assert listed.bounds() == (7, 40)
+    assert Listed([frozenset()], {}).bounds() is None and list(Listed([frozenset()], {})) == [()]

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from mutrose_cp.cli import main
-from mutrose_cp.output import boost_json
+from mutrose_cp.output import boost_json, write_boost_json
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 
@@ -126,3 +126,25 @@ def test_xml_leaf_lists_are_left_out_when_empty():
                              "            <t0>RoomA</t0>\n"
                              "            <t1>a&lt;b</t1>\n"
                              "        </locations>\n")
+
+
+def test_a_large_document_is_written_while_it_is_serialized():
+    """``write_boost_json`` streams: the same text as ``boost_json``, in several writes, for a
+    document of more pieces than are gathered before a write (nested lists and dicts, empty
+    members, the last member of each container without its comma)."""
+    import io
+
+    from mutrose_cp.boost_json import _FLUSH_PARTS
+
+    tree = {"count": "3", "components": [{"count": str(i), "alternatives": [[f"t{i}", f"t{i + 1}"], []]}
+                                         for i in range(_FLUSH_PARTS // 4)], "end": ""}
+    writes: list[str] = []
+
+    class Recorder(io.StringIO):
+        def write(self, text: str) -> int:
+            writes.append(text)
+            return len(text)
+
+    write_boost_json(tree, Recorder(), 4)
+    assert "".join(writes) == boost_json(tree, 4)
+    assert len(writes) > 2

@@ -293,6 +293,23 @@ def test_robot_partners_are_earlier_execution_partners_not_sequenced_after(tmp_p
     assert robot_partners(tg, sequenced, late, position) == [drop]  # late must run before pick
 
 
+def test_constraint_index_shares_the_partners_of_one_task_in_vertex_order():
+    """The decompositions of one task have the same EC partners: one sorted tuple, read from
+    any iterable of constraints (duplicates counted once)."""
+    g = Graph()
+    par = g.op("#")
+    first, second = g.task("AT1_1", par, sets(), sets())
+    (late,) = g.task("AT2_1", par, sets())
+    (early,) = g.task("AT3_1", par, sets())
+    constraints = [Constraint(EC, late, first), Constraint(EC, early, first), Constraint(EC, second, late),
+                   Constraint(EC, second, early), Constraint(EC, early, second), Constraint(SEQ, first, late)]
+    index = ConstraintIndex.of(c for c in constraints)
+    assert index.ec[first] == (late, early) == tuple(sorted((late, early)))
+    assert index.ec[second] is index.ec[first]
+    assert index.ec[late] == (first, second)
+    assert index.seq_after == {first: frozenset({late})}
+
+
 def test_robot_preconditions_are_written_by_partners_effects_renamed(tmp_path):
     hddl = tmp_path / "robots.hddl"
     hddl.write_text(ROBOT_DOMAIN)

@@ -154,15 +154,127 @@ def test_group_false_tasks_need_exactly_one_robot(tmp_path: Path, robots, ok):
 
 
 def test_the_finished_graph_knows_its_execution_constraint_edges_both_ways(reference):
-    """The finished Task Graph drops the builder's set of EC pairs (its largest index on large
-    missions) and answers from the partner lists: the same answers, both directions."""
+    """The finished Task Graph answers from the partner lists (no set of linked pairs, the
+    largest index of a large mission): the same answers, both directions."""
     from mutrose_cp.mission import find_mission_files
 
     tg = Mission.load(*find_mission_files(reference / "missions" / "vital-signs-monitoring")).task_graph
     tasks = [t.index for t in tg.tasks()]
     linked = {(t, p.task) for t in tasks for p in tg.ec_partners(t)}
-    assert linked and not tg._edges.ec_pairs
+    assert linked
+    refinements = {(e.source, e.target) for e in tg.edges() if e.kind != EdgeKind.EC}
     for a in tasks:
         for b in tasks:
-            assert tg.has_edge(a, b) == ((a, b) in linked or (a, b) in tg._edges.kind), (a, b)
+            assert tg.has_edge(a, b) == ((a, b) in linked or (a, b) in refinements), (a, b)
     assert all((b, a) in linked for a, b in linked)
+
+
+def test_the_finished_graph_answers_edge_queries_from_its_successor_lists():
+    """The builder looks edges up by vertex pair; the finished graph drops that table and reads
+    the successor lists: the same kinds, including an edge whose kind was changed, and a
+    vertex without successors answers with an empty sequence."""
+    from mutrose_cp.model.task_graph import TaskGraphBuilder
+
+    b = TaskGraphBuilder()
+    for i in range(4):
+        b.add(OperatorVertex(index=i, parent=-1 if i == 0 else 0, content="#"))
+    b.add_edge(0, 1, EdgeKind.AND)
+    b.add_edge(0, 2, EdgeKind.OR)
+    b.add_edge(0, 3, EdgeKind.AND)
+    b.add_edge(0, 1, EdgeKind.OR)  # changed in place: first among the successors, last among the OR ones
+    b.add_edge(2, 3, EdgeKind.CD)
+    building = [(a, c, b.edge_kind(a, c)) for a in range(4) for c in range(4) if b.has_edge(a, c)]
+    tg = b.freeze()
+    assert [(a, c, tg.edge_kind(a, c)) for a in range(4) for c in range(4) if tg.has_edge(a, c)] == building == [
+        (0, 1, EdgeKind.OR), (0, 2, EdgeKind.OR), (0, 3, EdgeKind.AND), (2, 3, EdgeKind.CD)]
+    assert list(tg.successors(0)) == [(1, EdgeKind.OR), (2, EdgeKind.OR), (3, EdgeKind.AND)]
+    assert tg.out(0, EdgeKind.OR) == [2, 1] and tg.out(0, EdgeKind.AND) == [3]
+    assert tg.children(0) == [1, 2, 3] and tg.children(2) == [] and list(tg.successors(3)) == []
+    assert tg.has_edges_of_kind(EdgeKind.CD) and not tg.has_edges_of_kind(EdgeKind.EC)
+    assert [(e.source, e.target, e.kind) for e in tg.edges()] == building
+    with pytest.raises(KeyError):
+        tg.edge_kind(1, 0)
+
+
+def test_execution_constraints_link_a_task_pair_once():
+    """``add_ec_to_all`` skips the tasks already linked to the new one (in either direction, or
+    earlier in the same call) and keeps the order of the others, on both partner lists."""
+    from mutrose_cp.model.task_graph import ExecutionPartner, TaskGraphBuilder
+
+    b = TaskGraphBuilder()
+    b.add(OperatorVertex(index=0, parent=-1, content="#"))
+    for i in range(1, 6):
+        b.add(OperatorVertex(index=i, parent=0, content="#"))
+    b.add_ec(5, 2, True, False)
+    b.add_ec(3, 5, True, False)
+    b.add_ec_to_all([1, 2, 3, 4, 1, 4], 5, False, True)
+    assert [p.task for p in b.ec_partners(5)] == [2, 3, 1, 4]
+    assert b.ec_partners(1) == b.ec_partners(4) == [ExecutionPartner(5, False, True)]
+    assert b.ec_partners(2) == b.ec_partners(3) == [ExecutionPartner(5, True, False)]
+    tg = b.freeze()
+    assert [a for a in range(6) if tg.has_edge(a, 5)] == [1, 2, 3, 4] and not tg.has_edge(1, 4)
+
+
+def test_successors_of_one_kind_read_like_a_list_of_pairs_once_frozen():
+    """A finished graph reads the successors of a vertex whose edges all have one kind from its
+    list by kind: the same pairs in the same order, by index, slice or iteration; a vertex with
+    edges of two kinds, or an edge whose kind was changed out of order, keeps its list."""
+    from mutrose_cp.model.task_graph import TaskGraphBuilder
+
+    b = TaskGraphBuilder()
+    for i in range(6):
+        b.add(OperatorVertex(index=i, parent=-1 if i == 0 else 0, content="#"))
+    b.add_edge(0, 1, EdgeKind.OR)
+    b.add_edge(0, 2, EdgeKind.OR)
+    b.add_edge(1, 3, EdgeKind.AND)
+    b.add_edge(1, 4, EdgeKind.CD)
+    b.add_edge(2, 4, EdgeKind.AND)
+    b.add_edge(2, 5, EdgeKind.OR)
+    b.add_edge(2, 4, EdgeKind.OR)  # all OR now, but 4 comes after 5 among the OR successors
+    expected = {v: list(b.successors(v)) for v in range(6)}
+    tg = b.freeze()
+    for v in range(6):
+        successors = tg.successors(v)
+        assert successors == expected[v] and list(successors) == expected[v] and len(successors) == len(expected[v])
+        assert [successors[i] for i in range(len(successors))] == expected[v] and successors[1:] == expected[v][1:]
+    assert expected[0] == [(1, EdgeKind.OR), (2, EdgeKind.OR)] and expected[2] == [(4, EdgeKind.OR), (5, EdgeKind.OR)]
+    assert tg.out(2, EdgeKind.OR) == [5, 4] and tg.children(2) == [5, 4]
+    assert [v for v in range(6) if tg.is_or(v)] == [0, 2]
+    assert type(tg.successors(0)) is not list and type(tg.successors(1)) is list and type(tg.successors(2)) is list
+
+
+def test_decomposition_keys_number_the_decompositions_in_vertex_order():
+    """The output keys ``t0, t1, ...`` follow the decomposition vertices in index order, built
+    once for everything that names them."""
+    from mutrose_cp.mission import find_mission_files
+
+    tg = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / "item-delivery")).task_graph
+    keys = tg.decomposition_keys
+    assert list(keys) == [d.index for d in tg.decompositions()] == sorted(keys)
+    assert list(keys.values()) == [f"t{i}" for i in range(len(keys))] and tg.decomposition_keys is keys
+
+
+def test_the_finished_graph_reads_a_tasks_decompositions_from_its_and_successors():
+    """When every task's decompositions are its AND successors, in order, the finished graph
+    reads them from there (no list per task); otherwise it keeps the lists.  Both answer alike."""
+    from mutrose_cp.mission import find_mission_files
+    from mutrose_cp.model.task_graph import DecompositionVertex, TaskGraphBuilder, TaskVertex
+
+    tg = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / "item-delivery")).task_graph
+    assert tg._edges.decompositions is None
+    for v in tg.vertices:
+        expected = [d for d in tg.vertices if isinstance(d, DecompositionVertex) and d.parent == v.index]
+        assert tg.decompositions_of(v.index) == expected
+    assert tg.decompositions_of(-1) == [] and tg.decompositions_of(len(tg.vertices)) == []
+
+    b = TaskGraphBuilder()
+    b.add(OperatorVertex(index=0, parent=-1, content="#"))
+    task = tg.vertices[next(t.index for t in tg.tasks())]
+    b.add(TaskVertex(index=1, parent=0, content=task.content, instance=task.instance))
+    dec = tg.decompositions_of(task.index)[0]
+    first = b.add(DecompositionVertex(index=2, parent=1, content=dec.content, decomposition=dec.decomposition))
+    b.add(DecompositionVertex(index=3, parent=1, content=dec.content, decomposition=dec.decomposition))
+    b.add_edge(1, 2, EdgeKind.AND)  # the second decomposition has no edge: the lists are kept
+    kept = b.freeze()
+    assert kept._edges.decompositions is not None and [d.index for d in kept.decompositions_of(1)] == [2, 3]
+    assert kept.decompositions_of(1)[0] is first

@@ -7,7 +7,7 @@ from __future__ import annotations
 import functools
 import itertools
 import re
-from typing import IO, Iterable, Mapping, Sequence, TypeAlias
+from typing import IO, Callable, Iterable, Mapping, Sequence, TypeAlias
 
 # a JSON value as PropertyTree holds it: every scalar is a string
 Tree: TypeAlias = "str | Sequence[Tree] | Mapping[str, Tree]"
@@ -38,9 +38,14 @@ def _escape(s: str) -> str:
     return '"' + "".join(out) + '"'
 
 
-def _boost_parts(tree: Tree, indent: int, out: list[str]) -> None:
+_FLUSH_PARTS = 1 << 14  # pieces gathered before a streamed document is written out
+
+
+def _boost_parts(tree: Tree, indent: int, out: list[str], flush: Callable[[list[str]], None] | None = None) -> None:
     """Append the pieces of ``tree``; string members are written inline (most of a task entry's
-    leaves), which halves the calls on large outputs."""
+    leaves), which halves the calls on large outputs.  With ``flush``, a long ``out`` is handed
+    to it after a container member: all but its last piece, the separator that the end of the
+    container still rewrites, can go."""
     if isinstance(tree, str):
         out.append(_escape(tree))
         return
@@ -55,8 +60,10 @@ def _boost_parts(tree: Tree, indent: int, out: list[str]) -> None:
                 out.append(f"{pad}{_escape(k)}: {_escape(v)},\n")
             else:
                 out.append(f"{pad}{_escape(k)}: ")
-                _boost_parts(v, indent + 4, out)
+                _boost_parts(v, indent + 4, out, flush)
                 out.append(",\n")
+                if flush is not None and len(out) > _FLUSH_PARTS:
+                    flush(out)
     else:
         out.append("[\n")
         for v in tree:
@@ -64,8 +71,10 @@ def _boost_parts(tree: Tree, indent: int, out: list[str]) -> None:
                 out.append(f"{pad}{_escape(v)},\n")
             else:
                 out.append(pad)
-                _boost_parts(v, indent + 4, out)
+                _boost_parts(v, indent + 4, out, flush)
                 out.append(",\n")
+                if flush is not None and len(out) > _FLUSH_PARTS:
+                    flush(out)
     last = out[-1]
     out[-1] = last[:-2] + "\n"  # no comma after the last member
     out.append(" " * indent + ("}" if isinstance(tree, dict) else "]"))
@@ -80,7 +89,15 @@ def boost_json(tree: Tree, indent: int = 0) -> str:
 
 
 def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
-    fh.write(boost_json(tree, indent))
+    """:func:`boost_json` written to ``fh`` while it is serialized: a large document (the
+    decomposition space of thousands of components) is never held whole as text."""
+    def flush(parts: list[str]) -> None:
+        fh.write("".join(parts[:-1]))
+        del parts[:-1]
+
+    out: list[str] = []
+    _boost_parts(tree, indent, out, flush)
+    fh.write("".join(out))
 
 
 def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:

@@ -10,7 +10,6 @@ import json
 import shutil
 import sys
 import time
-from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
@@ -311,7 +310,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     with phase("solving"):
         result = mission.decompose(request, progress)
     decompositions, total = result.decompositions, result.total
-    key = {d.index: f"t{i}" for i, d in enumerate(tg.decompositions())}
+    key = tg.decomposition_keys
     section = result.space_section(key.__getitem__)
     note = _note(request, result)
     model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
@@ -332,7 +331,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         with phase("writing the output"):
             write_output(model, out_path, file_type, args.json_style)
     elapsed = time.perf_counter() - start
-    kinds = Counter(str(c.kind) for c in constraints)
+    kinds = constraints.count_by_kind()
     data = {
         "command": "decompose",
         "algorithm": args.algorithm,

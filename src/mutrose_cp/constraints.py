@@ -7,8 +7,11 @@ SEQ/FB links are trimmed, and EC partners must agree on robot numbers.
 """
 from __future__ import annotations
 
+import itertools
+from array import array
+from collections import Counter
 from enum import StrEnum
-from typing import NamedTuple
+from typing import Iterable, Iterator, NamedTuple, Sequence, overload
 
 from .errors import MissionError
 from .model.task_graph import EdgeKind, OperatorVertex, TaskGraph, TaskVertex
@@ -35,6 +38,86 @@ class Constraint(NamedTuple):
     group: bool = True
     divisible: bool = True
 
+
+_KINDS = tuple(ConstraintKind)  # a stored kind is its position here
+_KIND_CODE = {kind: code for code, kind in enumerate(_KINDS)}
+_GROUP = tuple(flag & 1 == 1 for flag in range(4))  # by the stored flags
+_DIVISIBLE = tuple(flag & 2 == 2 for flag in range(4))
+
+
+class Constraints(Sequence[Constraint]):
+    """The final constraint list, kept by column (kind, first, second, flags) instead of as a
+    million named tuples: at 5000 vital-signs rooms a tuple each took 110 MB, the columns take
+    10 MB.  Reading it (by index or by iterating) gives :class:`Constraint` tuples, made when
+    read; it equals any sequence of the same constraints, a list included."""
+
+    __slots__ = ("_kinds", "_firsts", "_seconds", "_flags")
+
+    def __init__(self, constraints: Iterable[Constraint] = ()) -> None:
+        self._kinds = bytearray()
+        self._firsts = array("i")  # vertex indices
+        self._seconds = array("i")
+        self._flags = bytearray()  # group | divisible << 1
+        self.extend(constraints)
+
+    def append(self, c: Constraint) -> None:
+        self._kinds.append(_KIND_CODE[c.kind])
+        self._firsts.append(c.first)
+        self._seconds.append(c.second)
+        self._flags.append(c.group | c.divisible << 1)
+
+    def extend(self, constraints: Iterable[Constraint]) -> None:
+        for c in constraints:
+            self.append(c)
+
+    def add_all_pairs(self, kind: ConstraintKind, firsts: Sequence[int], seconds: Sequence[int],
+                      group: bool = True, divisible: bool = True) -> None:
+        """``kind`` between every vertex of ``firsts`` and every vertex of ``seconds``, by first
+        vertex and then second (a task pair's constraints, expanded over their decompositions)."""
+        n = len(firsts) * len(seconds)
+        self._kinds.extend(bytes([_KIND_CODE[kind]]) * n)
+        for first in firsts:
+            self._firsts.extend(array("i", [first]) * len(seconds))
+            self._seconds.extend(array("i", seconds))
+        self._flags.extend(bytes([group | divisible << 1]) * n)
+
+    def __len__(self) -> int:
+        return len(self._kinds)
+
+    def count_by_kind(self) -> Counter[str]:
+        """How many constraints there are of each kind present (a summary's counts)."""
+        return Counter({str(_KINDS[code]): n for code, n in Counter(self._kinds).items()})
+
+    @overload
+    def __getitem__(self, i: int) -> Constraint: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> list[Constraint]: ...
+
+    def __getitem__(self, i: int | slice) -> Constraint | list[Constraint]:
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        flags = self._flags[i]
+        return Constraint(_KINDS[self._kinds[i]], self._firsts[i], self._seconds[i], flags & 1 == 1, flags & 2 == 2)
+
+    def __iter__(self) -> Iterator[Constraint]:
+        # the tuples are made by tuple.__new__ from zipped columns: no Python call per constraint
+        columns = zip(map(_KINDS.__getitem__, self._kinds), self._firsts, self._seconds,
+                      map(_GROUP.__getitem__, self._flags), map(_DIVISIBLE.__getitem__, self._flags))
+        return map(tuple.__new__, itertools.repeat(Constraint), columns)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Constraints):
+            return (self._kinds == other._kinds and self._firsts == other._firsts
+                    and self._seconds == other._seconds and self._flags == other._flags)
+        if isinstance(other, Sequence) and not isinstance(other, (str, bytes)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]  # it changes while it is built
+
+    def __repr__(self) -> str:
+        return f"Constraints({list(self)!r})"
 
 _Child = int | list[Constraint]  # a task vertex, or the constraint list of a subtree
 
@@ -127,62 +210,73 @@ class _Decompositions(dict[int, list[int]]):
         return found
 
 
-def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint], decs: _Decompositions) -> list[Constraint]:
+def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint], decs: _Decompositions) -> Constraints:
     """§6.2: SEQ/FB over all decomposition pairs; PAR only where a CD edge orders the pair."""
-    out: list[Constraint] = []
+    out = Constraints()
     for c in task_constraints:
         if c.kind in (SEQ, FB):
-            out += [Constraint(c.kind, da, db) for da in decs[c.first] for db in decs[c.second]]
+            out.add_all_pairs(c.kind, decs[c.first], decs[c.second])
         else:
             for da in decs[c.first]:
                 if c.second in tg.out(da, EdgeKind.CD):
-                    out += [Constraint(SEQ, da, db) for db in decs[c.second]]
+                    out.add_all_pairs(SEQ, (da,), decs[c.second])
     return out
 
 
-def _execution_constraints(tg: TaskGraph, decs: _Decompositions) -> list[Constraint]:
-    """§6.3: one EC per decomposition pair of every EC-linked task pair.  The robot numbers of
-    each linked pair are checked here, once per task pair (§6.5): every decomposition pair of
-    it would fail alike, and the first failing pair is the first failing constraint."""
-    out: list[Constraint] = []
-    done: set[tuple[int, int]] = set()
+def _execution_constraints(tg: TaskGraph, decs: _Decompositions, out: Constraints) -> None:
+    """§6.3: one EC per decomposition pair of every EC-linked task pair, added to ``out``.  The
+    robot numbers of each linked pair are checked here, once per task pair (§6.5): every
+    decomposition pair of it would fail alike, and the first failing pair is the first failing
+    constraint.
+
+    A pair is in the partner lists of both its tasks and is taken from the first of them in
+    vertex order: the tasks already visited are all it takes to skip it at the second (a set of
+    the pairs done took 75 MB at 5000 vital-signs rooms)."""
+    visited: set[int] = set()
     for s in (v.index for v in tg.tasks()):
         for t, group, divisible in tg.ec_partners(s):
-            if (t, s) in done:
+            if t in visited:
                 continue
-            done.add((s, t))
             if decs[s] and decs[t]:
                 _check_robot_numbers(tg, decs[s][0], decs[t][0])
-            out += [Constraint(EC, ds, dt, group, divisible) for ds in decs[s] for dt in decs[t]]
-    return out
+            out.add_all_pairs(EC, decs[s], decs[t], group, divisible)
+        visited.add(s)
 
 
-def _drop_implied(constraints: list[Constraint]) -> list[Constraint]:
-    """§6.4: drop SEQ implied through SEQ/FB and FB implied through FB (one pass)."""
-    seq_succ: dict[int, set[int]] = {}
-    fb_succ: dict[int, set[int]] = {}
-    seq_pred: dict[int, set[int]] = {}
-    fb_pred: dict[int, set[int]] = {}
+def _drop_implied(constraints: Sequence[Constraint], out: Constraints) -> None:
+    """§6.4: drop SEQ implied through SEQ/FB and FB implied through FB (one pass); the others go
+    to ``out``.  The neighbours of each vertex are lists (most vertices have one or two): a set
+    each took 70 MB at 5000 vital-signs rooms."""
+    seq_succ: dict[int, list[int]] = {}
+    fb_succ: dict[int, list[int]] = {}
+    seq_pred: dict[int, list[int]] = {}
+    fb_pred: dict[int, list[int]] = {}
     for c in constraints:
         if c.kind == SEQ:
-            seq_succ.setdefault(c.first, set()).add(c.second)
-            seq_pred.setdefault(c.second, set()).add(c.first)
+            seq_succ.setdefault(c.first, []).append(c.second)
+            seq_pred.setdefault(c.second, []).append(c.first)
         elif c.kind == FB:
-            fb_succ.setdefault(c.first, set()).add(c.second)
-            fb_pred.setdefault(c.second, set()).add(c.first)
-    empty: set[int] = set()
-    kept: list[Constraint] = []
+            fb_succ.setdefault(c.first, []).append(c.second)
+            fb_pred.setdefault(c.second, []).append(c.first)
     for c in constraints:
         kind = c[0]
         if kind == SEQ:
-            mids = seq_succ.get(c.first, empty)
-            if mids and (mids & seq_pred.get(c.second, empty) or mids & fb_pred.get(c.second, empty)):
+            mids = seq_succ.get(c.first)
+            if mids and (_meet(mids, seq_pred.get(c.second)) or _meet(mids, fb_pred.get(c.second))):
                 continue
         elif kind == FB:
-            if fb_succ.get(c.first, empty) & fb_pred.get(c.second, empty):
+            if _meet(fb_succ.get(c.first), fb_pred.get(c.second)):
                 continue
-        kept.append(c)
-    return kept
+        out.append(c)
+
+
+def _meet(a: list[int] | None, b: list[int] | None) -> bool:
+    """Whether two neighbour lists share a vertex (by scanning when both are short)."""
+    if not a or not b:
+        return False
+    if len(a) * len(b) <= 64:
+        return any(x in b for x in a)
+    return not set(a).isdisjoint(b)
 
 
 def _check_robot_numbers(tg: TaskGraph, s: int, t: int) -> None:
@@ -203,9 +297,9 @@ def _check_robot_numbers(tg: TaskGraph, s: int, t: int) -> None:
         )
 
 
-def generate_constraints(tg: TaskGraph) -> list[Constraint]:
+def generate_constraints(tg: TaskGraph) -> Constraints:
     """The final constraint list over decomposition vertices, in the original's order."""
-    out: list[Constraint] = []
+    out = Constraints()
     decs = _Decompositions(tg)
     if not tg.unique_branch:
         root = tg.vertices[0]
@@ -213,4 +307,7 @@ def generate_constraints(tg: TaskGraph) -> list[Constraint]:
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
         has_cd = tg.has_edges_of_kind(EdgeKind.CD)
         out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd), decs)
-    return _drop_implied(out) + _execution_constraints(tg, decs)
+    constraints = Constraints()
+    _drop_implied(out, constraints)
+    _execution_constraints(tg, decs, constraints)
+    return constraints

@@ -98,6 +98,7 @@ class _Walker:
         self.counters: dict[int, int] = {}  # depth -> current forAll index (1-based)
         self.events: dict[int, str] = {}  # depth -> trigger event text
         self.instances: list[TaskInstance] = []
+        self._robot_numbers: dict[str, RobotNumber] = {}  # inferred, by abstract task
         self.var_mapping: dict[str, list[tuple[str, str]]] = {}
         for vm in config.var_mapping:
             self.var_mapping.setdefault(vm.task_id, []).extend(vm.pairs)
@@ -107,6 +108,14 @@ class _Walker:
                 self.declared_types.setdefault(d.name, d.type)
 
     # -- helpers -----------------------------------------------------------------------------
+    def _inferred_robot_number(self, task_name: str) -> RobotNumber:
+        """:func:`infer_robot_number`, once per abstract task: its instances share the value
+        (thousands of equal records otherwise)."""
+        robots = self._robot_numbers.get(task_name)
+        if robots is None:
+            robots = self._robot_numbers[task_name] = infer_robot_number(self.domain, task_name)
+        return robots
+
     def _enter(self, depth: int) -> None:
         for d in [d for d in self.counters if d >= depth]:
             del self.counters[d]
@@ -214,22 +223,24 @@ class _Walker:
         if node.or_decomposed and annotation.op in (";", "FALLBACK"):
             kind = "sequential" if annotation.op == ";" else "fallback"
             raise MissionError(f"OR decomposed goal cannot have {kind} runtime annotations", self._where(node))
-        queue = list(children)
+        return self._annotation_node(annotation, False, node, depth, list(children), snapshot)
 
-        def build(a: Annotation, inner: bool) -> RatNode:
-            if isinstance(a, AnnotationLeaf):
-                if not queue:
-                    raise MissionError(
-                        f"runtime annotation names more children than the goal has ({a.name})", self._where(node)
-                    )
-                return self.walk(queue.pop(0), depth + 1)
-            op = RatNode(OPERATOR, a.op, node.key, [], group=node.group, divisible=node.divisible,
-                         or_decomposition=node.or_decomposed, var_maps=snapshot, inner=inner)
-            for c in a.children:
-                op.children.append(build(c, True))
-            return op
-
-        return build(annotation, False)
+    def _annotation_node(self, a: Annotation, inner: bool, node: GMNode, depth: int, queue: list[GMNode],
+                         snapshot: Mapping[str, Binding]) -> RatNode:
+        """The node of annotation ``a`` of ``node``'s goal; its leaves take the goal's children
+        from ``queue`` in order.  (A method rather than a recursive closure: such a closure is a
+        reference cycle, which the paused cyclic collector never frees, one per goal.)"""
+        if isinstance(a, AnnotationLeaf):
+            if not queue:
+                raise MissionError(
+                    f"runtime annotation names more children than the goal has ({a.name})", self._where(node)
+                )
+            return self.walk(queue.pop(0), depth + 1)
+        op = RatNode(OPERATOR, a.op, node.key, [], group=node.group, divisible=node.divisible,
+                     or_decomposition=node.or_decomposed, var_maps=snapshot, inner=inner)
+        for c in a.children:
+            op.children.append(self._annotation_node(c, True, node, depth, queue, snapshot))
+        return op
 
     def _task(self, node: GMNode) -> RatNode:
         name = node.task_name or ""
@@ -237,7 +248,7 @@ class _Walker:
             raise MissionError(f"Could not find AT [{name}] in HDDL Domain definition.", self._where(node))
         suffix = "".join(f"_{self.counters[d]}" for d in sorted(self.counters)) or "_1"
         inst_id = f"{node.id}{suffix}"
-        robots = node.robot_number or infer_robot_number(self.domain, name)
+        robots = node.robot_number or self._inferred_robot_number(name)
         location: Value | None = None
         mapping = self.var_mapping.get(node.id, [])
         params: list[ParameterValue] = []

@@ -16,7 +16,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterator, TypeVar
 
-from .constraints import Constraint, generate_constraints
+from .constraints import Constraints, generate_constraints
 from .errors import MissionError, Problem
 from .expansion import Expansion, expand
 from .htn import DecompositionPath, all_task_paths
@@ -241,7 +241,7 @@ class Mission:
 
     @cached_property
     @_deep
-    def constraints(self) -> list[Constraint]:
+    def constraints(self) -> Constraints:
         return generate_constraints(self.task_graph)
 
     @_deep

@@ -122,7 +122,7 @@ class OutputModel:
     """Everything the writers need, with keys already assigned."""
 
     tg: TaskGraph
-    constraints: list[Constraint]
+    constraints: Sequence[Constraint]
     decompositions: Iterable[list[int]]  # valid mission decompositions (vertex indices)
     domain: Domain
     config: Configuration
@@ -134,7 +134,7 @@ class OutputBuilder:
     def __init__(self, model: OutputModel) -> None:
         self.m = model
         self.decs = model.tg.decompositions()
-        self.key = {d.index: f"t{i}" for i, d in enumerate(self.decs)}
+        self.key = model.tg.decomposition_keys
         self.printer = PredicatePrinter(model.domain, model.config, model.state)
 
     def actions(self) -> list[tuple[str, tuple[str, ...]]]:

@@ -406,11 +406,6 @@ class _GoalModelView:
 # Task Graph view
 
 
-def _output_keys(mission: "Mission") -> dict[int, str]:
-    """Decomposition vertex -> output task key ``t<m>``."""
-    return {d.index: f"t{i}" for i, d in enumerate(mission.task_graph.decompositions())}
-
-
 def _flags_text(group: bool, divisible: bool) -> str:
     return f"group={group} divisible={divisible}"
 
@@ -440,7 +435,7 @@ def task_graph_dot(mission: "Mission", rankdir: str = "LR") -> str:
     Node ids: ``v<index>`` for operator/goal vertices, the instance id for tasks (``AT1_2``),
     the decomposition id for decompositions (``AT1_2|1``)."""
     tg = mission.task_graph
-    keys = _output_keys(mission)
+    keys = tg.decomposition_keys  # the output's task keys
     dot = _new_graph("task_graph", rankdir, None, nodesep="0.12", ranksep="0.35")
     ids: dict[int, str] = {}
     for v in tg.vertices:
@@ -557,7 +552,7 @@ def decomposition_dot(mission: "Mission", index: int = 0, rankdir: str = "LR") -
     decomposition and :class:`~mutrose_cp.errors.MissionError` (exit 2) for an index out of range."""
     tg = mission.task_graph
     chosen, index, total = _nth(mission, index)
-    keys = _output_keys(mission)
+    keys = tg.decomposition_keys  # the output's task keys
     title = f"valid mission decomposition {index} (indices 0 to {total - 1} of {total})"
     dot = _new_graph("mission_decomposition", rankdir, title, nodesep="0.25", ranksep="0.5")
     ids = {d: dot.unique(tg.vertices[d].content) for d in chosen}

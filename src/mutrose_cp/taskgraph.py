@@ -48,9 +48,11 @@ class _Builder:
         # a task below must meet them all where it starts
         self.contexts_in_scope: dict[int, tuple[Test, ...]] = {}
 
-    def build(self) -> TaskGraphBuilder:
+    def build(self) -> tuple[TaskGraphBuilder, list[tuple[int, int]]]:
+        """The initial graph and its CD edges to redirect (§5.3); the builder's per-vertex maps
+        are dropped with it."""
         self._visit(self.exp.rat, None, None)
-        return self.tg
+        return self.tg, self.cd_edges
 
     def _context_test(self, goal_id: str, node: RatNode) -> Test | None:
         g = self.gm.node(goal_id)
@@ -372,18 +374,18 @@ class _Trimmer:
 def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
                      paths: dict[str, list[DecompositionPath]]) -> TaskGraph:
     """Build, connect and trim the Task Graph of an expanded mission."""
-    builder = _Builder(exp, gm, config, state, paths)
-    tg = builder.build()
+    tg, cd_edges = _Builder(exp, gm, config, state, paths).build()
     if not tg.vertices:
         raise MissionError("the mission has no task: every branch was removed or no task instance exists",
                            gm.source)
-    _final_context_edges(tg, builder.cd_edges)
+    _final_context_edges(tg, cd_edges)
     if _is_unique_branch(tg):
         _execution_constraint_edges(tg)
         return tg.freeze(unique_branch=True)  # the original neither trims nor expands these (§7.7)
     _expand_recursions(tg, state)
     trimmer = _Trimmer(tg)
     trimmed = trimmer.trim()
+    tg.release_lookups()  # the walk reads the untrimmed vertices and successors while the trimmed graph fills
     _execution_constraint_edges(tg, trimmer.link_kept)
     return trimmed.freeze()
 

@@ -9,10 +9,12 @@ constraints (EC).  A vertex's ``index`` is its position, which fixes the output 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from dataclasses import dataclass, field
+from functools import cached_property
 from operator import attrgetter
 from enum import StrEnum
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence, overload
 
 if TYPE_CHECKING:  # the types of the stages that produce a vertex's content
     from ..conditions import Test
@@ -134,19 +136,99 @@ class Edge(NamedTuple):
     divisible: bool = True
 
 
+class _SameKind(Sequence[tuple[int, EdgeKind]]):
+    """The successors of a finished graph's vertex whose edges all have one kind: its list of
+    successors by that kind, read as (successor, kind) pairs.  Most vertices with successors
+    are such; a list of pairs each took four times the memory."""
+
+    __slots__ = ("targets", "kind")
+
+    def __init__(self, targets: list[int], kind: EdgeKind) -> None:
+        self.targets = targets
+        self.kind = kind
+
+    def __len__(self) -> int:
+        return len(self.targets)
+
+    @overload
+    def __getitem__(self, i: int) -> tuple[int, EdgeKind]: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> list[tuple[int, EdgeKind]]: ...
+
+    def __getitem__(self, i: int | slice) -> tuple[int, EdgeKind] | list[tuple[int, EdgeKind]]:
+        if isinstance(i, slice):
+            return [(t, self.kind) for t in self.targets[i]]
+        return self.targets[i], self.kind
+
+    def __iter__(self) -> Iterator[tuple[int, EdgeKind]]:
+        return zip(self.targets, itertools.repeat(self.kind))
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Sequence) and not isinstance(other, (str, bytes)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return repr(list(self))
+
+
+# shared by every vertex without AND, OR or CD edges (never changed: a first edge replaces it)
+_NO_SUCCESSORS = _SameKind([], EdgeKind.AND)
+
+
+def _same_kind(successors: Sequence[tuple[int, EdgeKind]],
+               by_kind: Mapping[EdgeKind, Mapping[int, list[int]]], v: int) -> _SameKind | None:
+    """``successors`` of ``v`` as its list by kind, when they all have one kind and that list
+    holds them in the same order (an edge whose kind was changed can stand elsewhere there)."""
+    if not successors:
+        return None
+    kind = successors[0][1]
+    targets = by_kind[kind].get(v)
+    if targets is None or len(targets) != len(successors):
+        return None
+    if any(k is not kind or t != b for t, (b, k) in zip(targets, successors)):
+        return None
+    return _SameKind(targets, kind)
+
+
 @dataclass
 class _EdgeIndex:
     """The edges, indexed the ways the construction rules and the decomposers read them, in
     insertion order (which the original's traversals depend on).  Plain adjacency lists: large
-    missions have hundreds of thousands of EC edges."""
+    missions have hundreds of thousands of vertices and EC edges, so nothing is kept per vertex
+    or edge that a query can do without: no tuple keys, no empty lists."""
 
-    successors: dict[int, list[tuple[int, EdgeKind]]] = field(default_factory=dict)  # AND, OR, CD
-    by_kind: dict[tuple[int, EdgeKind], list[int]] = field(default_factory=dict)
-    kind: dict[tuple[int, int], EdgeKind] = field(default_factory=dict)
+    # AND, OR and CD successors by vertex index (most vertices, the decompositions, have none)
+    # (once frozen, those of one kind are read from ``by_kind``: _SameKind)
+    successors: list[Sequence[tuple[int, EdgeKind]]] = field(default_factory=list)
+    # kind -> vertex -> its successors through edges of that kind
+    by_kind: dict[EdgeKind, dict[int, list[int]]] = field(default_factory=lambda: {kind: {} for kind in EdgeKind})
+    # the kind of edge (a, b) as _pair(a, b), while building (the rules ask it for every new edge);
+    # the finished graph reads it from the successor lists
+    kind: dict[int, EdgeKind] | None = field(default_factory=dict)
     # execution constraints are symmetric and numerous: task -> partners, in the order added
     ec: dict[int, list[ExecutionPartner]] = field(default_factory=dict)
-    ec_pairs: set[int] = field(default_factory=set)  # (a, b) as _pair(a, b): a third of a tuple's memory
-    decompositions: dict[int, list[DecompositionVertex]] = field(default_factory=dict)  # by task
+    # by task; None once frozen when every task's decompositions are its AND successors, in order
+    decompositions: dict[int, list[DecompositionVertex]] | None = field(default_factory=dict)
+
+
+def _decompositions_are_and_successors(vertices: Sequence[Vertex], edges: _EdgeIndex) -> bool:
+    """Whether the decompositions of each task are its AND successors, in the same order, and
+    only tasks have decompositions: then a finished graph reads them from there instead of
+    keeping a list per task."""
+    by_task, ands = edges.decompositions, edges.by_kind[EdgeKind.AND]
+    if by_task is None or not all(0 <= t < len(vertices) and isinstance(vertices[t], TaskVertex) for t in by_task):
+        return False
+    for vertex in vertices:
+        if isinstance(vertex, TaskVertex):
+            listed = by_task.get(vertex.index, [])
+            successors = ands.get(vertex.index, [])
+            if len(listed) != len(successors) or any(d is not vertices[s] for d, s in zip(listed, successors)):
+                return False
+    return True
 
 
 def _pair(a: int, b: int) -> int:
@@ -163,44 +245,61 @@ class _Adjacency:
     def out(self, v: int, *kinds: EdgeKind) -> list[int]:
         """Successors of ``v`` through edges of the given kinds, in insertion order."""
         if len(kinds) == 1:
-            return self._edges.by_kind.get((v, kinds[0]), [])
+            return self._edges.by_kind[kinds[0]].get(v, [])
         return [u for u, k in self._edges.successors[v] if k in kinds]
 
     def children(self, v: int) -> list[int]:
         """AND/OR successors in insertion order (a vertex refines into one kind only)."""
-        ands = self._edges.by_kind.get((v, EdgeKind.AND))
-        ors = self._edges.by_kind.get((v, EdgeKind.OR))
+        by_kind = self._edges.by_kind
+        ands = by_kind[EdgeKind.AND].get(v)
+        ors = by_kind[EdgeKind.OR].get(v)
         if ands and ors:
             return self.out(v, EdgeKind.AND, EdgeKind.OR)
         return ands or ors or []
 
-    def successors(self, v: int) -> list[tuple[int, EdgeKind]]:
+    def successors(self, v: int) -> Sequence[tuple[int, EdgeKind]]:
         """AND, OR and CD successors of ``v`` with the edge kind, in insertion order."""
         return self._edges.successors[v]
 
     def is_or(self, v: int) -> bool:
-        return any(k == EdgeKind.OR for _, k in self._edges.successors[v])
+        successors = self._edges.successors[v]
+        if isinstance(successors, _SameKind):
+            return successors.kind == EdgeKind.OR
+        return any(k == EdgeKind.OR for _, k in successors)
+
+    def _kind_of(self, a: int, b: int) -> EdgeKind | None:
+        """The kind of the AND, OR or CD edge ``(a, b)``, None without one."""
+        kinds = self._edges.kind
+        if kinds is not None:
+            return kinds.get(_pair(a, b))
+        return next((k for u, k in self._edges.successors[a] if u == b), None)
 
     def edge_kind(self, a: int, b: int) -> EdgeKind:
-        return self._edges.kind[(a, b)]
+        kind = self._kind_of(a, b)
+        if kind is None:
+            raise KeyError((a, b))
+        return kind
 
     def has_edges_of_kind(self, kind: EdgeKind) -> bool:
         """Whether any edge has ``kind`` (AND, OR or CD; EC edges are kept apart)."""
-        return any(k is kind for k in self._edges.kind.values())
+        return any(self._edges.by_kind[kind].values())
 
     def has_edge(self, a: int, b: int) -> bool:
-        if (a, b) in self._edges.kind:
+        if self._kind_of(a, b) is not None:
             return True
-        if self._edges.ec_pairs:  # while building: every EC pair is kept as an int
-            return _pair(a, b) in self._edges.ec_pairs
-        return any(p.task == b for p in self._edges.ec.get(a, ()))  # frozen: the partner list
+        return any(p.task == b for p in self._edges.ec.get(a, ()))
 
     def ec_partners(self, v: int) -> list[ExecutionPartner]:
         """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
         return self._edges.ec.get(v, [])
 
     def decompositions_of(self, task: int) -> list[DecompositionVertex]:
-        return self._edges.decompositions.get(task, [])
+        by_task = self._edges.decompositions
+        if by_task is not None:
+            return by_task.get(task, [])
+        if not 0 <= task < len(self.vertices) or not isinstance(self.vertices[task], TaskVertex):
+            return []
+        return [self.decomposition(d) for d in self._edges.by_kind[EdgeKind.AND].get(task, ())]
 
     def decompositions(self) -> list[DecompositionVertex]:
         return [v for v in self.vertices if isinstance(v, DecompositionVertex)]
@@ -239,10 +338,16 @@ class TaskGraph(_Adjacency):
     # by the kept vertex that now stands for their subtree: their conditions are checked there
     achieve_carried: Mapping[int, tuple[ScopeVertex, ...]] = field(default_factory=dict)
 
+    @cached_property
+    def decomposition_keys(self) -> dict[int, str]:
+        """Decomposition vertex -> its output key, ``t0, t1, ...`` in vertex order; built once,
+        for the output, its space section and the views that name the decompositions alike."""
+        return {d.index: f"t{i}" for i, d in enumerate(self.decompositions())}
+
     def edges(self) -> Iterator[Edge]:
         """All edges (EC ones in both directions), by source vertex and then insertion order."""
-        for a in range(len(self.vertices)):
-            for b, kind in self._edges.successors[a]:
+        for a, successors in enumerate(self._edges.successors):
+            for b, kind in successors:
                 yield Edge(a, b, kind)
             for p in self._edges.ec.get(a, ()):
                 yield Edge(a, p.task, EdgeKind.EC, p.group, p.divisible)
@@ -268,29 +373,40 @@ class TaskGraphBuilder(_Adjacency):
         """Append ``vertex``, whose index must be :attr:`next_index`."""
         assert vertex.index == len(self.vertices), (vertex.index, len(self.vertices))
         self.vertices.append(vertex)
-        self._edges.successors[vertex.index] = []
+        self._edges.successors.append(_NO_SUCCESSORS)
         if isinstance(vertex, DecompositionVertex):
-            self._edges.decompositions.setdefault(vertex.parent, []).append(vertex)
+            by_task = self._edges.decompositions
+            assert by_task is not None, "a frozen graph takes no vertices"
+            by_task.setdefault(vertex.parent, []).append(vertex)
         return vertex
 
     def replace(self, vertex: DecompositionVertex) -> None:
         """Put a changed decomposition vertex in place of the one with its index."""
         old = self.decomposition(vertex.index)
-        siblings = self._edges.decompositions[old.parent]
+        by_task = self._edges.decompositions
+        assert by_task is not None, "a frozen graph's vertices do not change"
+        siblings = by_task[old.parent]
         siblings[siblings.index(old)] = vertex
         self.vertices[vertex.index] = vertex
 
     def add_edge(self, a: int, b: int, kind: EdgeKind) -> None:
         """An AND, OR or CD edge; adding an existing edge again changes its kind in place."""
-        old = self._edges.kind.get((a, b))
+        edges = self._edges
+        assert edges.kind is not None, "a frozen graph's edges do not change"
+        pair = _pair(a, b)
+        old = edges.kind.get(pair)
         if old is None:
-            self._edges.successors[a].append((b, kind))
-            self._edges.by_kind.setdefault((a, kind), []).append(b)
+            successors = edges.successors[a]
+            if isinstance(successors, list):
+                successors.append((b, kind))
+            else:  # the vertex's first edge
+                edges.successors[a] = [(b, kind)]
+            edges.by_kind[kind].setdefault(a, []).append(b)
         elif old != kind:
-            self._edges.successors[a] = [(u, kind if u == b else k) for u, k in self._edges.successors[a]]
-            self._edges.by_kind[(a, old)].remove(b)
-            self._edges.by_kind.setdefault((a, kind), []).append(b)
-        self._edges.kind[(a, b)] = kind
+            edges.successors[a] = [(u, kind if u == b else k) for u, k in edges.successors[a]]
+            edges.by_kind[old][a].remove(b)
+            edges.by_kind[kind].setdefault(a, []).append(b)
+        edges.kind[pair] = kind
 
     def _partner(self, task: int, group: bool, divisible: bool) -> ExecutionPartner:
         """One shared partner record per (task, flags): a task appears in the partner list of
@@ -305,27 +421,44 @@ class TaskGraphBuilder(_Adjacency):
         """An execution constraint between task vertices ``a`` and ``b`` (both directions)."""
         self._edges.ec.setdefault(a, []).append(self._partner(b, group, divisible))
         self._edges.ec.setdefault(b, []).append(self._partner(a, group, divisible))
-        self._edges.ec_pairs.add(_pair(a, b))
-        self._edges.ec_pairs.add(_pair(b, a))
 
     def add_ec_to_all(self, tasks: Sequence[int], v: int, group: bool, divisible: bool) -> None:
         """Execution constraints between task ``v`` and each of ``tasks`` it is not yet linked to,
-        in that order (one call for what is the bulk of a large mission's edges)."""
+        in that order (one call for what is the bulk of a large mission's edges).  Which tasks
+        ``v`` is linked to is read from its partner list, once per call: a set of every linked
+        pair, kept while building, was the largest index of a large mission's construction."""
         edges = self._edges
-        pairs, kinds, ec = edges.ec_pairs, edges.kind, edges.ec
+        kinds, ec = edges.kind, edges.ec
+        assert kinds is not None, "a frozen graph's edges do not change"
         partner_v = self._partner(v, group, divisible)
         partners_of_v = ec.setdefault(v, [])
+        linked = {p.task for p in partners_of_v}
         for t in tasks:  # add_ec(t, v, ...) for each, inlined: a million calls on large missions
-            if t << 32 | v not in pairs and (t, v) not in kinds:
+            if t not in linked and t << 32 | v not in kinds:
                 ec.setdefault(t, []).append(partner_v)
                 partners_of_v.append(self._partner(t, group, divisible))
-                pairs.add(t << 32 | v)
-                pairs.add(v << 32 | t)
+                linked.add(t)
+
+    def release_lookups(self) -> None:
+        """Drop the indexes that look edges up (by kind, by vertex pair, decompositions by
+        task), keeping the vertices and their successor lists, for a graph that is only walked
+        from now on: the untrimmed graph, walked once more for its execution constraints while
+        the trimmed one takes them.  It takes no more edges."""
+        self._edges.by_kind = {kind: {} for kind in EdgeKind}
+        self._edges.kind = None
+        self._edges.decompositions = {}
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
-        """The finished graph.  The set of EC pairs, which only spares the construction rules a
-        look through partner lists, is dropped: on large missions it is the graph's largest
-        index (two ints per execution-constrained task pair)."""
-        self._edges.ec_pairs = set()
+        """The finished graph.  The kinds by vertex pair, which only spare the construction
+        rules a look through the successor lists, are dropped (an int per edge), and the
+        successors of one kind are read from the lists by kind."""
+        edges = self._edges
+        edges.kind = None
+        for v, successors in enumerate(edges.successors):
+            same = _same_kind(successors, edges.by_kind, v)
+            if same is not None:
+                edges.successors[v] = same
+        if _decompositions_are_and_successors(self.vertices, edges):
+            edges.decompositions = None
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})

@@ -57,9 +57,10 @@ LAYERED_LIST_LIMIT = 10_000
 # Components
 
 
-@dataclass
+@dataclass(slots=True)
 class Component:
-    """An independent part of the decomposition space."""
+    """An independent part of the decomposition space (slots: a large mission has tens of
+    thousands, one per forAll instance and task at least)."""
 
     records: list[Record]
     choice_vars: list[int]  # decomposition literals of the component (positive var ids)
@@ -79,7 +80,11 @@ def _components(enc: Encoding) -> list[Component]:
             if not (isinstance(r, Exactly) and r.target is FALSE):
                 constant.append(Component([r], [], solutions=[], count=0))
             continue
-        groups.setdefault(find(vs[0]), Component([], [])).records.append(r)
+        root = find(vs[0])
+        group = groups.get(root)
+        if group is None:
+            group = groups[root] = Component([], [])
+        group.records.append(r)
     dec_var = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
     for var in sorted(dec_var):
         root = find(var)
@@ -208,7 +213,7 @@ class DecompositionSpace:
         choices: list[Alternatives] = []
         for c in self.components:
             if c.solutions is not None:
-                choices.append(Listed([tuple(sorted(self.var_to_dec[v] for v in sol)) for sol in c.solutions]))
+                choices.append(Listed(c.solutions, self.var_to_dec))
             elif c.layers is not None:
                 choices.append(FromLayers(c.layers, self.var_to_dec))
             else:
@@ -242,7 +247,7 @@ class DecompositionSpace:
             product *= c.count
         fixed_part = len(choices) - varying
         prefix = [d for ch in choices[:fixed_part] for d in ch.first()]
-        return prefix, self._odometer(choices, fixed_part)
+        return prefix, self._odometer(choices[fixed_part:], 0)  # the fixed part is not held while listing
 
     @staticmethod
     def _odometer(choices: Sequence[Alternatives], start: int) -> Iterator[list[int]]:
@@ -317,20 +322,28 @@ class Alternatives(Protocol):
 
 @dataclass
 class Listed:
-    """Solutions listed in full."""
+    """Solutions listed in full, each read as its sorted decomposition vertices when it is
+    asked for (made for every solution of every component at once, they were a large mission's
+    largest part of the listing)."""
 
-    solutions: list[tuple[int, ...]]
+    solutions: list[frozenset[int]]  # decomposition literals
+    var_to_dec: dict[int, int]
+
+    def _vertices(self, solution: frozenset[int]) -> tuple[int, ...]:
+        return tuple(sorted(self.var_to_dec[v] for v in solution))
 
     def __iter__(self) -> Iterator[tuple[int, ...]]:
-        return iter(self.solutions)
+        return map(self._vertices, self.solutions)
 
     def first(self) -> tuple[int, ...]:
-        return self.solutions[0]
+        return self._vertices(self.solutions[0])
 
     def bounds(self) -> tuple[int, int] | None:
         if not any(self.solutions):
             return None
-        return min(min(s) for s in self.solutions if s), max(max(s) for s in self.solutions if s)
+        to_dec = self.var_to_dec
+        return (min(min(to_dec[v] for v in s) for s in self.solutions if s),
+                max(max(to_dec[v] for v in s) for s in self.solutions if s))
 
 
 @dataclass

@@ -58,7 +58,7 @@ class Encoding:
 class Encoder:
     """Builds the :class:`Encoding` of a Task Graph with the exploratory algorithm's semantics."""
 
-    def __init__(self, tg: TaskGraph, constraints: list[Constraint], domain: Domain, gm: GoalModel,
+    def __init__(self, tg: TaskGraph, constraints: Sequence[Constraint], domain: Domain, gm: GoalModel,
                  config: Configuration, initial: InitialState, explain: bool = False) -> None:
         self.tg = tg
         self.domain = domain

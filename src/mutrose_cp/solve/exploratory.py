@@ -9,7 +9,7 @@ the choices, which is what the CP-SAT decomposer avoids.  The rules themselves a
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Sequence
 
 from ..constraints import Constraint
 from ..errors import NoDecompositionError, Problem
@@ -49,7 +49,7 @@ class _PartialDecomposition:
 class ExploratoryDecomposer:
     """Walks the mission queue once, extending every partial decomposition at each task."""
 
-    def __init__(self, tg: TaskGraph, constraints: list[Constraint], domain: Domain, gm: GoalModel,
+    def __init__(self, tg: TaskGraph, constraints: Sequence[Constraint], domain: Domain, gm: GoalModel,
                  config: Configuration, initial: InitialState,
                  progress: Callable[[int, int], None] | None = None) -> None:
         self.tg = tg

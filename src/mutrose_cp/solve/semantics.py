@@ -21,6 +21,7 @@ from __future__ import annotations
 import itertools
 from bisect import bisect_left
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Iterable, Iterator, Mapping, Sequence, TypeVar, overload
 
 from ..conditions import AllOf, Test, compare, holds, translate
@@ -90,24 +91,48 @@ def initial_state(initial: InitialState) -> State:
     return State(initial.fact_map(), dict(initial.value_map()))
 
 
-@dataclass(frozen=True)
 class ConstraintIndex:
-    """Execution-constraint partners and SEQ successors of each decomposition vertex."""
+    """Execution-constraint partners and SEQ successors of each decomposition vertex.
 
-    ec: dict[int, set[int]]
-    seq_after: dict[int, set[int]]
+    Only decompositions with robot-related preconditions ask for them (§7.4), so the tables are
+    built on first use: a large mission often has no such precondition, while its execution
+    constraints number in the millions.  The decompositions of one task have the same partners,
+    so they share one sorted tuple (a set per decomposition took more memory than the
+    constraints themselves)."""
+
+    def __init__(self, constraints: Sequence[Constraint]) -> None:
+        self._constraints = constraints
 
     @classmethod
     def of(cls, constraints: Iterable[Constraint]) -> "ConstraintIndex":
-        ec: dict[int, set[int]] = {}
-        seq_after: dict[int, set[int]] = {}
-        for c in constraints:
+        return cls(constraints if isinstance(constraints, Sequence) else list(constraints))
+
+    @property
+    def ec(self) -> Mapping[int, tuple[int, ...]]:
+        """Decomposition -> its EC partners, in vertex order."""
+        return self._tables[0]
+
+    @property
+    def seq_after(self) -> Mapping[int, frozenset[int]]:
+        """Decomposition -> the decompositions a SEQ constraint puts after it."""
+        return self._tables[1]
+
+    @cached_property
+    def _tables(self) -> tuple[dict[int, tuple[int, ...]], dict[int, frozenset[int]]]:
+        ec: dict[int, list[int]] = {}
+        seq_after: dict[int, list[int]] = {}
+        for c in self._constraints:
             if c.kind == EC:
-                ec.setdefault(c.first, set()).add(c.second)
-                ec.setdefault(c.second, set()).add(c.first)
+                ec.setdefault(c.first, []).append(c.second)
+                ec.setdefault(c.second, []).append(c.first)
             elif c.kind == SEQ:
-                seq_after.setdefault(c.first, set()).add(c.second)
-        return cls(ec, seq_after)
+                seq_after.setdefault(c.first, []).append(c.second)
+        shared: dict[tuple[int, ...], tuple[int, ...]] = {}
+        partners = {}
+        for d, found in ec.items():
+            key = tuple(sorted(set(found)))
+            partners[d] = shared.setdefault(key, key)
+        return partners, {d: frozenset(after) for d, after in seq_after.items()}
 
 
 def contradicts_itself(dec: Decomposition) -> bool:
@@ -471,7 +496,7 @@ def robot_partners(tg: TaskGraph, index: ConstraintIndex, d: int, queue_position
     ``d`` shares with them before ``d`` starts: partners of tasks earlier in the mission queue
     that no SEQ constraint puts after ``d``, in application order."""
     task = tg.vertices[d].parent
-    after = index.seq_after.get(d, set())
+    after = index.seq_after.get(d, frozenset())
     return [e for e in application_order(index.ec.get(d, ()))
             if queue_position[tg.vertices[e].parent] < queue_position[task] and e not in after]
 
