@@ -11,7 +11,7 @@
         --schedule.py--> chosen jobs, teams, compacted times, routes
 
 The time limit is the whole run's: the load relaxation may take a tenth of it, the warm start's
-local moves about a seventh (more than half on a large mission, whose restricted search rarely
+local moves about a seventh (two fifths on a large mission, whose restricted search rarely
 improves a good hint) and the LP a quarter (an LP cut short gives no bound), and the search has
 what is left, at least a tenth.  A work limit instead of the time limit (:mod:`.budget`) is
 shared the same way, the search taking the shares the others leave, so that the schedule does not
@@ -43,7 +43,7 @@ if TYPE_CHECKING:
 LOAD_SHARE = 0.1  # of the time limit, at most, for the load relaxation
 LP_SHARE = 0.25  # for the LP
 IMPROVE_SHARE = 0.15  # for the local improvement of the warm start, at most
-LARGE_IMPROVE_SHARE = 0.55  # for it on a mission searched within near robots and places
+LARGE_IMPROVE_SHARE = 0.4  # for it on a mission searched within near robots and places
 SEARCH_SHARE = 0.1  # for the search, at least
 
 
