@@ -12,7 +12,7 @@ import pytest
 from mutrose_cp.errors import MissionError, NoDecompositionError
 from mutrose_cp.mission import Mission
 from mutrose_cp.constraints import EC
-from mutrose_cp.model.task_graph import EdgeKind, OperatorVertex
+from mutrose_cp.model.task_graph import EdgeKind, OperatorVertex, TaskGraphBuilder
 
 from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission
 
@@ -169,15 +169,20 @@ def test_the_finished_graph_knows_its_execution_constraint_edges_both_ways(refer
     assert all((b, a) in linked for a, b in linked)
 
 
+def _operators(count: int) -> TaskGraphBuilder:
+    """A builder holding ``count`` operator vertices: the first is the root, the others its
+    children (no edges yet)."""
+    b = TaskGraphBuilder()
+    for i in range(count):
+        b.add(OperatorVertex(index=i, parent=-1 if i == 0 else 0, content="#"))
+    return b
+
+
 def test_the_finished_graph_answers_edge_queries_from_its_successor_lists():
     """The builder looks edges up by vertex pair; the finished graph drops that table and reads
     the successor lists: the same kinds, including an edge whose kind was changed, and a
     vertex without successors answers with an empty sequence."""
-    from mutrose_cp.model.task_graph import TaskGraphBuilder
-
-    b = TaskGraphBuilder()
-    for i in range(4):
-        b.add(OperatorVertex(index=i, parent=-1 if i == 0 else 0, content="#"))
+    b = _operators(4)
     b.add_edge(0, 1, EdgeKind.AND)
     b.add_edge(0, 2, EdgeKind.OR)
     b.add_edge(0, 3, EdgeKind.AND)
@@ -199,12 +204,9 @@ def test_the_finished_graph_answers_edge_queries_from_its_successor_lists():
 def test_execution_constraints_link_a_task_pair_once():
     """``add_ec_to_all`` skips the tasks already linked to the new one (in either direction, or
     earlier in the same call) and keeps the order of the others, on both partner lists."""
-    from mutrose_cp.model.task_graph import ExecutionPartner, TaskGraphBuilder
+    from mutrose_cp.model.task_graph import ExecutionPartner
 
-    b = TaskGraphBuilder()
-    b.add(OperatorVertex(index=0, parent=-1, content="#"))
-    for i in range(1, 6):
-        b.add(OperatorVertex(index=i, parent=0, content="#"))
+    b = _operators(6)
     b.add_ec(5, 2, True, False)
     b.add_ec(3, 5, True, False)
     b.add_ec_to_all([1, 2, 3, 4, 1, 4], 5, False, True)
@@ -219,11 +221,7 @@ def test_successors_of_one_kind_read_like_a_list_of_pairs_once_frozen():
     """A finished graph reads the successors of a vertex whose edges all have one kind from its
     list by kind: the same pairs in the same order, by index, slice or iteration; a vertex with
     edges of two kinds, or an edge whose kind was changed out of order, keeps its list."""
-    from mutrose_cp.model.task_graph import TaskGraphBuilder
-
-    b = TaskGraphBuilder()
-    for i in range(6):
-        b.add(OperatorVertex(index=i, parent=-1 if i == 0 else 0, content="#"))
+    b = _operators(6)
     b.add_edge(0, 1, EdgeKind.OR)
     b.add_edge(0, 2, EdgeKind.OR)
     b.add_edge(1, 3, EdgeKind.AND)
