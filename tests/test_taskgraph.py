@@ -256,7 +256,7 @@ def test_the_finished_graph_reads_a_tasks_decompositions_from_its_and_successors
     """When every task's decompositions are its AND successors, in order, the finished graph
     reads them from there (no list per task); otherwise it keeps the lists.  Both answer alike."""
     from mutrose_cp.mission import find_mission_files
-    from mutrose_cp.model.task_graph import DecompositionVertex, TaskGraphBuilder, TaskVertex
+    from mutrose_cp.model.task_graph import DecompositionVertex, TaskVertex
 
     tg = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / "item-delivery")).task_graph
     assert tg._edges.decompositions is None
