@@ -160,8 +160,14 @@ def test_the_constraint_list_reads_back_as_the_tuples_it_was_given():
                                                         (False, False)]
     assert stored != given[:4] and stored != [*given[:4], Constraint(EC, 1, 2)]
     assert stored.count_by_kind() == {"SEQ": 1, "FB": 1, "EC": 3}
-    stored.add_all_pairs(EC, [5, 6], [8, 9, 10], False, True)
-    assert list(stored)[5:] == [Constraint(EC, a, b, False, True) for a in (5, 6) for b in (8, 9, 10)]
+    stored.add_all_pairs(EC, [5, 6], [8, 9, 10], False, True)  # few pairs: appended one by one
+    stored.add_all_pairs(SEQ, [1, 2, 3], [4, 5, 6, 7])  # many: whole columns at once
+    assert list(stored)[5:] == [Constraint(EC, a, b, False, True) for a in (5, 6) for b in (8, 9, 10)] + [
+        Constraint(SEQ, a, b) for a in (1, 2, 3) for b in (4, 5, 6, 7)]
+    copied = Constraints()
+    for row in stored.rows():
+        copied.append_row(row)
+    assert copied == stored and len(list(stored.rows())) == len(stored) == 23
 
 
 def test_implied_constraints_are_found_through_short_and_long_neighbour_lists():

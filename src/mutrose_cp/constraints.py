@@ -43,6 +43,7 @@ _KINDS = tuple(ConstraintKind)  # a stored kind is its position here
 _KIND_CODE = {kind: code for code, kind in enumerate(_KINDS)}
 _GROUP = tuple(flag & 1 == 1 for flag in range(4))  # by the stored flags
 _DIVISIBLE = tuple(flag & 2 == 2 for flag in range(4))
+_FEW_PAIRS = 8  # up to this many pairs, appending them is quicker than building columns to extend by
 
 
 class Constraints(Sequence[Constraint]):
@@ -74,12 +75,34 @@ class Constraints(Sequence[Constraint]):
                       group: bool = True, divisible: bool = True) -> None:
         """``kind`` between every vertex of ``firsts`` and every vertex of ``seconds``, by first
         vertex and then second (a task pair's constraints, expanded over their decompositions)."""
+        code, flag = _KIND_CODE[kind], group | divisible << 1
+        if len(firsts) * len(seconds) <= _FEW_PAIRS:  # most task pairs: one column entry at a time
+            for first in firsts:
+                for second in seconds:
+                    self._kinds.append(code)
+                    self._firsts.append(first)
+                    self._seconds.append(second)
+                    self._flags.append(flag)
+            return
         n = len(firsts) * len(seconds)
-        self._kinds.extend(bytes([_KIND_CODE[kind]]) * n)
+        self._kinds.extend(bytes([code]) * n)
         for first in firsts:
             self._firsts.extend(array("i", [first]) * len(seconds))
             self._seconds.extend(array("i", seconds))
-        self._flags.extend(bytes([group | divisible << 1]) * n)
+        self._flags.extend(bytes([flag]) * n)
+
+    def rows(self) -> Iterator[tuple[int, int, int, int]]:
+        """The stored columns row by row (kind code, first, second, flags): the generator's own
+        passes over a million constraints read them without making the tuples."""
+        return zip(self._kinds, self._firsts, self._seconds, self._flags)
+
+    def append_row(self, row: tuple[int, int, int, int]) -> None:
+        """Append a row as :meth:`rows` gives it."""
+        code, first, second, flag = row
+        self._kinds.append(code)
+        self._firsts.append(first)
+        self._seconds.append(second)
+        self._flags.append(flag)
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -243,7 +266,7 @@ def _execution_constraints(tg: TaskGraph, decs: _Decompositions, out: Constraint
         visited.add(s)
 
 
-def _drop_implied(constraints: Sequence[Constraint], out: Constraints) -> None:
+def _drop_implied(constraints: Constraints, out: Constraints) -> None:
     """§6.4: drop SEQ implied through SEQ/FB and FB implied through FB (one pass); the others go
     to ``out``.  The neighbours of each vertex are lists (most vertices have one or two): a set
     each took 70 MB at 5000 vital-signs rooms."""
@@ -251,23 +274,24 @@ def _drop_implied(constraints: Sequence[Constraint], out: Constraints) -> None:
     fb_succ: dict[int, list[int]] = {}
     seq_pred: dict[int, list[int]] = {}
     fb_pred: dict[int, list[int]] = {}
-    for c in constraints:
-        if c.kind == SEQ:
-            seq_succ.setdefault(c.first, []).append(c.second)
-            seq_pred.setdefault(c.second, []).append(c.first)
-        elif c.kind == FB:
-            fb_succ.setdefault(c.first, []).append(c.second)
-            fb_pred.setdefault(c.second, []).append(c.first)
-    for c in constraints:
-        kind = c[0]
-        if kind == SEQ:
-            mids = seq_succ.get(c.first)
-            if mids and (_meet(mids, seq_pred.get(c.second)) or _meet(mids, fb_pred.get(c.second))):
+    seq, fb = _KIND_CODE[SEQ], _KIND_CODE[FB]
+    for kind, first, second, _ in constraints.rows():
+        if kind == seq:
+            seq_succ.setdefault(first, []).append(second)
+            seq_pred.setdefault(second, []).append(first)
+        elif kind == fb:
+            fb_succ.setdefault(first, []).append(second)
+            fb_pred.setdefault(second, []).append(first)
+    for row in constraints.rows():
+        kind, first, second, _ = row
+        if kind == seq:
+            mids = seq_succ.get(first)
+            if mids and (_meet(mids, seq_pred.get(second)) or _meet(mids, fb_pred.get(second))):
                 continue
-        elif kind == FB:
-            if _meet(fb_succ.get(c.first), fb_pred.get(c.second)):
+        elif kind == fb:
+            if _meet(fb_succ.get(first), fb_pred.get(second)):
                 continue
-        out.append(c)
+        out.append_row(row)
 
 
 def _meet(a: list[int] | None, b: list[int] | None) -> bool:
