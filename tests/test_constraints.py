@@ -170,6 +170,17 @@ def test_the_constraint_list_reads_back_as_the_tuples_it_was_given():
     assert copied == stored and len(list(stored.rows())) == len(stored) == 23
 
 
+def test_a_list_of_constraints_reads_as_the_rows_it_would_be_stored_as():
+    """The output reads constraints as stored rows; a plain list (the API accepts any sequence)
+    is converted to the same rows, and each row stands for its constraint."""
+    from mutrose_cp.constraints import EC, FB, SEQ, Constraint, Constraints, constraint_of_row, constraint_rows
+
+    given = [Constraint(SEQ, 3, 7), Constraint(FB, 7, 2), Constraint(EC, 4, 9, False, True),
+             Constraint(EC, 9, 4, True, False), Constraint(EC, 1, 2, False, False)]
+    assert list(constraint_rows(given)) == list(constraint_rows(Constraints(given)))
+    assert [constraint_of_row(row) for row in constraint_rows(given)] == given
+
+
 def test_implied_constraints_are_found_through_short_and_long_neighbour_lists():
     """Dropping implied constraints asks whether two neighbour lists share a vertex: scanned when
     both are short, through a set when they are long; absent lists share nothing."""

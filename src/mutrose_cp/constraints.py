@@ -120,8 +120,7 @@ class Constraints(Sequence[Constraint]):
     def __getitem__(self, i: int | slice) -> Constraint | list[Constraint]:
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(len(self)))]
-        flags = self._flags[i]
-        return Constraint(_KINDS[self._kinds[i]], self._firsts[i], self._seconds[i], flags & 1 == 1, flags & 2 == 2)
+        return constraint_of_row((self._kinds[i], self._firsts[i], self._seconds[i], self._flags[i]))
 
     def __iter__(self) -> Iterator[Constraint]:
         # the tuples are made by tuple.__new__ from zipped columns: no Python call per constraint
@@ -181,6 +180,20 @@ def _combinations(kind: ConstraintKind, children: int, pairs_needed: bool) -> li
     if not pairs_needed:
         return []
     return [(i, j) for i in range(children) for j in range(i + 1, children)]
+
+
+def constraint_rows(constraints: Iterable[Constraint]) -> Iterator[tuple[int, int, int, int]]:
+    """Constraints as stored rows (kind code, first, second, flags): a :class:`Constraints`
+    gives its own, any other sequence is converted."""
+    if isinstance(constraints, Constraints):
+        return constraints.rows()
+    return ((_KIND_CODE[c.kind], c.first, c.second, c.group | c.divisible << 1) for c in constraints)
+
+
+def constraint_of_row(row: tuple[int, int, int, int]) -> Constraint:
+    """The constraint a stored row stands for."""
+    code, first, second, flags = row
+    return Constraint(_KINDS[code], first, second, _GROUP[flags], _DIVISIBLE[flags])
 
 
 def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constraint]:
