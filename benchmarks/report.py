@@ -89,10 +89,16 @@ done about it:
   50,000 (176 s → 155 s), the same bytes. What remains is spread: the Task Graph (~80 MB at 5000
   rooms, twice while trimming), the expansion and its annotation tree (~65 MB), the space's
   solutions as frozensets (~50 MB).
+* **Constraints by row.** Constraint generation appends a task pair's few decomposition pairs
+  one by one (building columns to extend by cost more than the pairs), the implied-constraint
+  pass and the output read the stored rows without making a tuple each, and the output makes the
+  text around a constraint's two keys once per kind and flags: at 5000 rooms constraints 2.79 s
+  → 2.05 s, output 2.29 s → 1.83 s, the same bytes.
 * **Still to do** for the 5 s target at 5000 rooms (the peak is under 800 MB): stamping
   identical forAll instances from one template in the earlier stages too (expansion, grounding,
-  Task Graph fragment, constraints). What remains is spread over them: Task Graph ~30 %,
-  constraints ~20 %, encoding and solving ~20 %, output ~15 %, expansion ~10 %.
+  Task Graph fragment, constraints). What remains is spread over them (5000 rooms, one core):
+  Task Graph 3.6 s, constraints 2.0 s, encoding 1.8 s, output 1.8 s, space 0.9 s, expansion
+  0.8 s; no single function is worth more than a few percent.
 """
 
 
