@@ -354,10 +354,13 @@ def test_work_and_time_limits_are_checked(tmp_path, capsys):
             AllocationOptions(work_limit=bad)
 
 
-def test_a_budget_shares_work_in_fixed_parts_and_time_in_what_is_left():
+def test_a_budget_shares_work_in_fixed_parts_and_time_in_what_is_left(monkeypatch):
+    from mutrose_cp.allocate import budget as budget_module
+
+    monkeypatch.setattr(budget_module.time, "perf_counter", lambda: 100.0)  # a clock that stands still
     clock, work = Budget(10.0), Budget(10.0, 4.0)
-    assert work.part(0.25) == Budget(2.5, 1.0) and work.after(0.0) == work  # no clock in a work budget
-    assert clock.after(time.perf_counter() - 4.0).seconds <= 6.0
+    assert work.part(0.25) == Budget(2.5, 1.0) and work.rest(96.0, 0.5) == work.part(0.5)  # no clock in work
+    assert clock.rest(96.0, 0.5) == Budget(6.0) and clock.rest(80.0) == Budget(0.0)  # what is left, at least 0
     assert work.job_steps() == 4 * JOB_STEPS_PER_UNIT and clock.job_steps() is None
     steps = work.running()
     assert steps(4 * JOB_STEPS_PER_UNIT - 1) and not steps(4 * JOB_STEPS_PER_UNIT)

@@ -148,20 +148,15 @@ def _best_schedule(am: AllocationModel, limits: SearchLimits, progress: Callable
     except IncompleteSolveError:
         if warm is None:
             raise
-        problem = am.problem
-        end = {j: warm.start[j] + problem.jobs[j].duration for j in warm.chosen}
-        schedule = compact(problem, warm.chosen, warm.teams, warm.start, end)
-        return "FEASIBLE", None, schedule, time.perf_counter() - started
+        return "FEASIBLE", None, warm.schedule(am.problem), time.perf_counter() - started
     return outcome.status, outcome.bound, _schedule(am, outcome.values), outcome.seconds
 
 
 def _search_budget(budget: Budget, started: float, improve_share: float) -> Budget:
     """The search's budget: what the clock has left since ``started`` (at least a tenth of the
     time limit), or the work left over by the other phases' shares."""
-    if budget.deterministic:
-        return budget.part(1 - LOAD_SHARE - improve_share)  # the LP counts iterations, not work
-    left = budget.after(started)
-    return left if left.seconds >= SEARCH_SHARE * budget.seconds else budget.part(SEARCH_SHARE)
+    left = budget.rest(started, 1 - LOAD_SHARE - improve_share)  # in work: the LP counts iterations instead
+    return left if budget.deterministic or left.seconds >= SEARCH_SHARE * budget.seconds else budget.part(SEARCH_SHARE)
 
 
 def _schedule(am: AllocationModel, values: list[int]) -> Schedule:

@@ -253,7 +253,7 @@ def _solve(lp: _Lp, goal: list[tuple[float, Expr]], started: float, budget: Budg
     if budget is not None and budget.deterministic:
         settings.max_iter = LP_ITERATIONS
     elif budget is not None:
-        left = budget.after(started).seconds
+        left = budget.rest(started).seconds
         if left <= 0:
             return LpBound(None, "MaxTime", time.perf_counter() - started)
         settings.time_limit = left

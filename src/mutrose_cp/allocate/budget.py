@@ -44,11 +44,12 @@ class Budget:
         """A share of this budget, for one phase."""
         return Budget(self.seconds * fraction, None if self.work is None else self.work * fraction)
 
-    def after(self, started: float) -> Budget:
-        """What is left of a clock budget since ``started`` (``time.perf_counter()``); a work
-        budget is fixed in advance, so it is left as it is."""
+    def rest(self, started: float, share: float = 1.0) -> Budget:
+        """What a phase that follows others since ``started`` (``time.perf_counter()``) may
+        take: on the clock, what is left of this budget; in work, which nothing measures as it
+        goes, the ``share`` of it fixed in advance."""
         if self.work is not None:
-            return self
+            return self.part(share)
         return replace(self, seconds=max(0.0, self.seconds - (time.perf_counter() - started)))
 
     def limit(self, parameters: cmh.SatParameters, workers: int) -> None:

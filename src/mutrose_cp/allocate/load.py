@@ -73,7 +73,7 @@ def load_bound(problem: AllocationProblem, objective: Objective, budget: Budget,
     for index, value in enumerate(values):
         m.proto.solution_hint.vars.append(index)
         m.proto.solution_hint.values.append(value)
-    lighter = _solve(m, budget.after(started).part(0.5 if budget.deterministic else 1.0), workers, seed)
+    lighter = _solve(m, budget.rest(started, 0.5), workers, seed)
     solutions = [values] + ([list(lighter.solution)] if lighter.status in (OPTIMAL, FEASIBLE) else [])
     picked = tuple([d for d, literal in chosen.items() if literal_value(solution, literal)] for solution in solutions)
     return LoadBound(bound, status, picked, time.perf_counter() - started)
@@ -125,11 +125,12 @@ def linked_candidates(problem: AllocationProblem) -> dict[str, dict[str, frozens
     return out
 
 
-def pools(problem: AllocationProblem) -> list[frozenset[str]]:
-    """The candidate sets of the jobs (alone and with the jobs they must share robots with)
-    and, while there are few, their unions (in a fixed order)."""
-    linked = {s for partners in linked_candidates(problem).values() for s in partners.values()}
-    found = sorted({frozenset(j.candidates) for j in problem.jobs.values() if j.candidates} | linked, key=sorted)
+def pools(problem: AllocationProblem, linked: dict[str, dict[str, frozenset[str]]]) -> list[frozenset[str]]:
+    """The candidate sets of the jobs, alone and with the jobs they must share robots with
+    (``linked``: :func:`linked_candidates`), and, while there are few, their unions (in a fixed
+    order)."""
+    together = {s for partners in linked.values() for s in partners.values()}
+    found = sorted({frozenset(j.candidates) for j in problem.jobs.values() if j.candidates} | together, key=sorted)
     closed = set(found)
     frontier = list(found)
     while frontier and len(closed) < MAX_POOLS:
@@ -143,8 +144,9 @@ def _pools(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, An
            ways: dict[str, dict[str, int]], makespan: cp_model.IntVar) -> None:
     """Each pool's work and ways in fit in ``|S| * makespan``."""
     robots = problem.robots
-    members = _PoolMembers(m, problem, chosen)
-    for number, pool in enumerate(pools(problem)):
+    linked = linked_candidates(problem)
+    members = _PoolMembers(m, problem, chosen, linked)
+    for number, pool in enumerate(pools(problem, linked)):
         inside = members.of(pool, number)
         if not inside:
             continue
@@ -160,11 +162,12 @@ class _PoolMembers:
     must share their robots with a chosen job such that only the pool's robots can do both (an
     item fetched and handed over by one robot needs a robot that can do both)."""
 
-    def __init__(self, m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, Any]) -> None:
+    def __init__(self, m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, Any],
+                 linked: dict[str, dict[str, frozenset[str]]]) -> None:
         self.m = m
         self.problem = problem
         self.chosen = chosen
-        self.linked = linked_candidates(problem)
+        self.linked = linked
         self.together: dict[tuple[str, str], Any] = {}
 
     def of(self, pool: frozenset[str], number: int) -> dict[str, Any]:

@@ -32,7 +32,7 @@ from .improve import improve
 from .model import START, AllocationModel
 from .options import Objective
 from .problem import AllocationProblem
-from .schedule import chosen_predecessors, robot_sequences
+from .schedule import Schedule, chosen_predecessors, compact, robot_sequences
 
 Plan = tuple[dict[str, tuple[str, ...]], dict[str, int]]  # teams and start times of the chosen jobs
 
@@ -45,6 +45,11 @@ class WarmStart:
     teams: dict[str, tuple[str, ...]]
     start: dict[str, int]
     decomposition_values: list[int]  # every variable of the decomposition model, by proto index
+
+    def schedule(self, problem: AllocationProblem) -> Schedule:
+        """The warm start as a schedule of its own (compacted like a search's solution)."""
+        end = {j: self.start[j] + problem.jobs[j].duration for j in self.chosen}
+        return compact(problem, self.chosen, self.teams, self.start, end)
 
     def route_arcs(self, problem: AllocationProblem) -> set[tuple[str, str, str]]:
         """``(robot, source, target)`` for the arcs of every robot's route (from ``START`` for
@@ -69,17 +74,14 @@ def warm_start(problem: AllocationProblem, balanced: Sequence[list[str]] = (), o
     for number, chosen in enumerate(candidates):
         plan = greedy_plan(problem, chosen)
         if plan is not None:
-            if budget.deterministic:
-                share = budget.part(0.25 / len(candidates))
-            else:
-                share = budget.part(0.25).after(started).part(1 / (len(candidates) - number))
+            left = len(candidates) - number  # an equal part, for each candidate left, of the quarter left
+            share = budget.part(0.25).rest(started, left / len(candidates)).part(1 / left)
             teams, start, value = improve(problem, chosen, *plan, objective, share, seed, floor)
             plans.append((value, len(plans), chosen, (teams, start)))
     plans.sort(key=lambda p: p[:2])
     if plans:
         _, _, chosen, plan = plans[0]
-        rest = budget.part(0.75) if budget.deterministic else budget.after(started)
-        teams, start, value = improve(problem, chosen, *plan, objective, rest, seed + 1, floor)
+        teams, start, value = improve(problem, chosen, *plan, objective, budget.rest(started, 0.75), seed + 1, floor)
         plans[0] = (value, 0, chosen, (teams, start))
     for _, _, chosen, plan in plans:
         values = _decomposition_values(problem, set(chosen))
