@@ -69,17 +69,16 @@ class _Builder:
                 raise MissionError("the goal model's root is a task; a mission needs a root goal", self.gm.source)
             self._add_task(node, parent, edge)
             return
-        vertex = self._scope_vertex(node, parent)
+        vertex = self._scope_vertex(node, parent, edge)
         if vertex is None:
             return  # a false context that nothing enables: the branch disappears
-        if parent is not None:
-            self.tg.add_edge(parent.index, vertex.index, edge)
         for child in node.children:
             self._visit(child, vertex, node)
 
-    def _scope_vertex(self, node: RatNode, parent: ScopeVertex | None) -> ScopeVertex | None:
-        """The operator or means-end goal vertex of ``node``, added to the graph, or None when
-        its goal's creation condition is false and no earlier task can make it true."""
+    def _scope_vertex(self, node: RatNode, parent: ScopeVertex | None, edge: EdgeKind) -> ScopeVertex | None:
+        """The operator or means-end goal vertex of ``node``, added to the graph below ``parent``
+        through an ``edge``, or None when its goal's creation condition is false and no earlier
+        task can make it true."""
         test = None
         if node.is_forall_dummy:
             goal = node.children[0].related_goal
@@ -104,7 +103,10 @@ class _Builder:
             achieve=is_achieve and not (parent is not None and parent.forall),
             var_maps=node.var_maps, contexts=contexts,
         )
-        self.tg.add(vertex)
+        if parent is None:
+            self.tg.add(vertex)
+        else:
+            self.tg.add_child(vertex, edge)
         self.cd_edges.extend((d, vertex.index) for d in pending)
         self.contexts_in_scope[vertex.index] = contexts + (self.contexts_in_scope[parent.index] if parent else ())
         return vertex
@@ -121,15 +123,13 @@ class _Builder:
                 f"{self.gm.source}: task {inst.gm_task}",
             )
         flags = {"group": parent.group, "divisible": parent.divisible}
-        tv = tg.add(TaskVertex(index=tg.next_index, parent=parent.index, content=inst.id, instance=inst,
-                               contexts=self.contexts_in_scope[parent.index], **flags))
-        tg.add_edge(parent.index, tv.index, edge)
+        tv = tg.add_child(TaskVertex(index=tg.next_index, parent=parent.index, content=inst.id, instance=inst,
+                                     contexts=self.contexts_in_scope[parent.index], **flags), edge)
         binding = inst.binding
         for n, path in enumerate(self.paths[inst.name], start=1):
             dec = Decomposition(f"{inst.id}|{n}", inst, n, path, ground_path(path, binding))
-            dv = tg.add(DecompositionVertex(index=tg.next_index, parent=tv.index, content=dec.id,
-                                            decomposition=dec, **flags))
-            tg.add_edge(tv.index, dv.index, AND)
+            tg.add_child(DecompositionVertex(index=tg.next_index, parent=tv.index, content=dec.id,
+                                             decomposition=dec, **flags), AND)
 
     def _enabled(self, test: Test, parent: ScopeVertex | None, pending: list[int]) -> bool:
         """Search the already-built graph for tasks that can make a false context true (§5.2);
@@ -285,11 +285,12 @@ class _Trimmer:
     def trim(self) -> TaskGraphBuilder:
         tg = self.tg
         root = next(v.index for v in tg.vertices if isinstance(v, ScopeVertex) and len(tg.children(v.index)) >= 2)
-        below_root = self._subtree(root)
+        # the vertices are in depth-first order and those before the root have one child at
+        # most: they are the chain leading down to it, and every vertex after it is below it
         for vx in tg.vertices[root:]:
-            v = vx.index
-            if not isinstance(vx, ScopeVertex) or v not in below_root:
+            if not isinstance(vx, ScopeVertex):
                 continue
+            v = vx.index
             if v == root:
                 self._insert(v, None)
                 self._insert_tasks(v, v)
@@ -302,36 +303,34 @@ class _Trimmer:
         self._copy_cd_edges()
         return self.new
 
-    def _subtree(self, root: int) -> set[int]:
-        below: set[int] = set()
-        stack = [root]
-        while stack:
-            u = stack.pop()
-            below.add(u)
-            stack.extend(self.tg.children(u))
-        return below
-
     def _first_edge_kind(self, old: int) -> EdgeKind:
         kids = self.tg.children(old)
         return self.tg.edge_kind(old, kids[0]) if kids else AND
 
     def _insert(self, old: int, parent_old: int | None) -> None:
-        parent = self.index[parent_old] if parent_old is not None else -1
-        vertex = self.tg.vertices[old].moved(self.new.next_index, parent)
-        self.new.add(vertex)
+        if parent_old is None:
+            vertex = self.new.add(self.tg.vertices[old].moved(self.new.next_index, -1))
+        else:
+            vertex = self.new.add_child(self.tg.vertices[old].moved(self.new.next_index, self.index[parent_old]),
+                                        self._first_edge_kind(parent_old))
         self.index[old] = vertex.index
-        if parent_old is not None:
-            self.new.add_edge(parent, vertex.index, self._first_edge_kind(parent_old))
 
     def _insert_tasks(self, op_old: int, under_old: int) -> None:
-        for u in self.tg.children(op_old):
-            if isinstance(self.tg.vertices[u], TaskVertex):
-                self._insert(u, under_old)
-                for d in self.tg.out(u, AND):
-                    nd = self.tg.decomposition(d).moved(self.new.next_index, self.index[u])
-                    self.new.add(nd)
-                    self.index[d] = nd.index
-                    self.new.add_edge(self.index[u], nd.index, AND)
+        """The task children of ``op_old``, each followed by its decompositions, hung under the
+        kept copy of ``under_old`` (the bulk of the graph: the loop is kept tight)."""
+        tg, new, index = self.tg, self.new, self.index
+        vertices = tg.vertices
+        parent, kind = -1, AND
+        for u in tg.children(op_old):
+            task = vertices[u]
+            if not isinstance(task, TaskVertex):
+                continue
+            if parent == -1:
+                parent, kind = index[under_old], self._first_edge_kind(under_old)
+            moved = new.add_child(task.moved(new.next_index, parent), kind).index
+            index[u] = moved
+            for d in tg.out(u, AND):
+                index[d] = new.add_child(vertices[d].moved(new.next_index, moved), AND).index
 
     def _kept_ancestor(self, old: int) -> int:
         p = self.tg.vertices[old].parent

@@ -380,6 +380,28 @@ class TaskGraphBuilder(_Adjacency):
             by_task.setdefault(vertex.parent, []).append(vertex)
         return vertex
 
+    def add_child(self, vertex: Vertex, kind: EdgeKind) -> Vertex:
+        """Append ``vertex`` and the edge of ``kind`` from its parent to it: :meth:`add` and
+        :meth:`add_edge` in one, for the tree edges, which the construction and the trimming
+        add by the hundred thousand and which cannot exist yet (the vertex is new)."""
+        self.add(vertex)
+        edges = self._edges
+        assert edges.kind is not None, "a frozen graph's edges do not change"
+        a, b = vertex.parent, vertex.index
+        successors = edges.successors[a]
+        if isinstance(successors, list):
+            successors.append((b, kind))
+        else:  # the parent's first edge
+            edges.successors[a] = [(b, kind)]
+        by_parent = edges.by_kind[kind]
+        targets = by_parent.get(a)
+        if targets is None:
+            by_parent[a] = [b]
+        else:
+            targets.append(b)
+        edges.kind[a << 32 | b] = kind
+        return vertex
+
     def replace(self, vertex: DecompositionVertex) -> None:
         """Put a changed decomposition vertex in place of the one with its index."""
         old = self.decomposition(vertex.index)
