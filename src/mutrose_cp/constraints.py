@@ -269,11 +269,13 @@ def _execution_constraints(tg: TaskGraph, decs: _Decompositions, out: Constraint
     vertex order: the tasks already visited are all it takes to skip it at the second (a set of
     the pairs done took 75 MB at 5000 vital-signs rooms)."""
     visited: set[int] = set()
-    for s in (v.index for v in tg.tasks()):
+    for task in tg.tasks():
+        s, number = task.index, task.instance.robot_number
         for t, group, divisible in tg.ec_partners(s):
             if t in visited:
                 continue
-            if decs[s] and decs[t]:
+            # most linked tasks share one robot-number record (see expansion): those agree
+            if decs[s] and decs[t] and tg.task(t).instance.robot_number is not number:
                 _check_robot_numbers(tg, decs[s][0], decs[t][0])
             out.add_all_pairs(EC, decs[s], decs[t], group, divisible)
         visited.add(s)

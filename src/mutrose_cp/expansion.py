@@ -99,6 +99,7 @@ class _Walker:
         self.events: dict[int, str] = {}  # depth -> trigger event text
         self.instances: list[TaskInstance] = []
         self._robot_numbers: dict[str, RobotNumber] = {}  # inferred, by abstract task
+        self._robot_numbers_of_goals: dict[str, RobotNumber] = {}  # by goal-model task, one record per value
         self.var_mapping: dict[str, list[tuple[str, str]]] = {}
         for vm in config.var_mapping:
             self.var_mapping.setdefault(vm.task_id, []).extend(vm.pairs)
@@ -114,6 +115,17 @@ class _Walker:
         robots = self._robot_numbers.get(task_name)
         if robots is None:
             robots = self._robot_numbers[task_name] = infer_robot_number(self.domain, task_name)
+        return robots
+
+    def _robot_number(self, node: GMNode, task_name: str) -> RobotNumber:
+        """The robot number of ``node``'s instances, one record per value in the whole mission:
+        execution-constrained tasks that share it agree without a check (a million linked pairs
+        on large missions, see ``constraints``)."""
+        robots = self._robot_numbers_of_goals.get(node.id)
+        if robots is None:
+            value = node.robot_number or self._inferred_robot_number(task_name)
+            same = next((r for r in self._robot_numbers_of_goals.values() if r == value), value)
+            robots = self._robot_numbers_of_goals[node.id] = same
         return robots
 
     def _enter(self, depth: int) -> None:
@@ -248,7 +260,7 @@ class _Walker:
             raise MissionError(f"Could not find AT [{name}] in HDDL Domain definition.", self._where(node))
         suffix = "".join(f"_{self.counters[d]}" for d in sorted(self.counters)) or "_1"
         inst_id = f"{node.id}{suffix}"
-        robots = node.robot_number or self._inferred_robot_number(name)
+        robots = self._robot_number(node, name)
         location: Value | None = None
         mapping = self.var_mapping.get(node.id, [])
         params: list[ParameterValue] = []
