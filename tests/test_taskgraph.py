@@ -90,6 +90,17 @@ def test_false_context_searched_through_the_operator(op, tasks, cd):
     assert _count(mission) == 1
 
 
+def test_nested_contexts_enabled_by_one_task_give_one_edge():
+    """G5 and G6 inside it both need the room lit, and AT1 beside them lights it: both goals
+    depend on AT1's decomposition, and both dependencies lead to AT2, which gets one CD edge."""
+    g6 = GoalNode((TaskNode("TaskB"),), condition="current_room.is_lit")
+    g5 = GoalNode((g6, TaskNode("TaskB")), annotation=("flat", ";"), condition="current_room.is_lit")
+    tree = GoalNode((TaskNode("TaskA"), g5), annotation=("flat", "#"))
+    mission = load_mission(_spec(tree, _task("TaskA", "act2"), _task("TaskB", "act1")))
+    assert _cd_edges(mission) == [("AT1_1|1", "AT2_1"), ("AT1_1|1", "AT3_1")]
+    assert _count(mission) == 1
+
+
 def test_context_dependency_orders_parallel_tasks():
     """The CD edge of AT1 # G5 turns the parallel pair into SEQ; without it there is none."""
     g5 = GoalNode((TaskNode("TaskB"),), condition="current_room.is_lit")

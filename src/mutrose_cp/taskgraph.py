@@ -191,9 +191,11 @@ def _final_context_edges(tg: TaskGraphBuilder, cd_edges: list[tuple[int, int]]) 
                 if u not in seen:
                     seen.add(u)
                     stack.append(u)
+        linked = {u for u, _kind in tg.successors(d)} | {p.task for p in tg.ec_partners(d)}
         for t in sorted(targets):
-            if not tg.has_edge(d, t):
-                tg.add_edge(d, t, CD)
+            if t not in linked:  # one decomposition can enable the tasks of every forAll copy
+                tg.add_new_edge(d, t, CD)
+                linked.add(t)
 
 
 class _ExecutionScopes:
@@ -357,8 +359,8 @@ class _Trimmer:
             if a not in index:
                 continue
             for b, kind in tg.successors(a):
-                if kind == CD and b in index:
-                    self.new.add_edge(index[a], index[b], CD)
+                if kind == CD and b in index:  # (a, b) has one kind: the copy is a new edge
+                    self.new.add_new_edge(index[a], index[b], CD)
 
     def link_kept(self, tasks: Sequence[int], v: int, group: bool, divisible: bool) -> None:
         """Execution constraints met on the untrimmed graph, added between the kept copies of

@@ -206,9 +206,8 @@ class _EdgeIndex:
     successors: list[Sequence[tuple[int, EdgeKind]]] = field(default_factory=list)
     # kind -> vertex -> its successors through edges of that kind
     by_kind: dict[EdgeKind, dict[int, list[int]]] = field(default_factory=lambda: {kind: {} for kind in EdgeKind})
-    # the kind of edge (a, b) as _pair(a, b), while building (the rules ask it for every new edge);
-    # the finished graph reads it from the successor lists
-    kind: dict[int, EdgeKind] | None = field(default_factory=dict)
+    # edges are added while building, until the graph is frozen (or its lookups released)
+    open: bool = True
     # execution constraints are symmetric and numerous: task -> partners, in the order added
     ec: dict[int, list[ExecutionPartner]] = field(default_factory=dict)
     # by task; None once frozen when every task's decompositions are its AND successors, in order
@@ -229,11 +228,6 @@ def _decompositions_are_and_successors(vertices: Sequence[Vertex], edges: _EdgeI
             if len(listed) != len(successors) or any(d is not vertices[s] for d, s in zip(listed, successors)):
                 return False
     return True
-
-
-def _pair(a: int, b: int) -> int:
-    """One int for the directed vertex pair ``(a, b)`` (vertex indices stay below 2^32)."""
-    return a << 32 | b
 
 
 class _Adjacency:
@@ -268,10 +262,9 @@ class _Adjacency:
         return any(k == EdgeKind.OR for _, k in successors)
 
     def _kind_of(self, a: int, b: int) -> EdgeKind | None:
-        """The kind of the AND, OR or CD edge ``(a, b)``, None without one."""
-        kinds = self._edges.kind
-        if kinds is not None:
-            return kinds.get(_pair(a, b))
+        """The kind of the AND, OR or CD edge ``(a, b)``, None without one: looked up in the
+        successors of ``a`` (an index by vertex pair took an int and a dict entry per edge, twice
+        while trimming, and the rules ask only about vertices with few successors)."""
         return next((k for u, k in self._edges.successors[a] if u == b), None)
 
     def edge_kind(self, a: int, b: int) -> EdgeKind:
@@ -385,22 +378,25 @@ class TaskGraphBuilder(_Adjacency):
         :meth:`add_edge` in one, for the tree edges, which the construction and the trimming
         add by the hundred thousand and which cannot exist yet (the vertex is new)."""
         self.add(vertex)
+        self.add_new_edge(vertex.parent, vertex.index, kind)
+        return vertex
+
+    def add_new_edge(self, a: int, b: int, kind: EdgeKind) -> None:
+        """An AND, OR or CD edge ``(a, b)`` that the caller knows is not in the graph yet (see
+        :meth:`add_edge`)."""
         edges = self._edges
-        assert edges.kind is not None, "a frozen graph's edges do not change"
-        a, b = vertex.parent, vertex.index
+        assert edges.open, "a frozen graph's edges do not change"
         successors = edges.successors[a]
         if isinstance(successors, list):
             successors.append((b, kind))
-        else:  # the parent's first edge
+        else:  # the vertex's first edge
             edges.successors[a] = [(b, kind)]
-        by_parent = edges.by_kind[kind]
-        targets = by_parent.get(a)
+        by_source = edges.by_kind[kind]
+        targets = by_source.get(a)
         if targets is None:
-            by_parent[a] = [b]
+            by_source[a] = [b]
         else:
             targets.append(b)
-        edges.kind[a << 32 | b] = kind
-        return vertex
 
     def replace(self, vertex: DecompositionVertex) -> None:
         """Put a changed decomposition vertex in place of the one with its index."""
@@ -412,23 +408,18 @@ class TaskGraphBuilder(_Adjacency):
         self.vertices[vertex.index] = vertex
 
     def add_edge(self, a: int, b: int, kind: EdgeKind) -> None:
-        """An AND, OR or CD edge; adding an existing edge again changes its kind in place."""
+        """An AND, OR or CD edge; adding an existing edge again changes its kind in place.  The
+        edge is looked for among the successors of ``a``: a rule that adds many edges from one
+        vertex knows which are new and calls :meth:`add_new_edge`."""
         edges = self._edges
-        assert edges.kind is not None, "a frozen graph's edges do not change"
-        pair = _pair(a, b)
-        old = edges.kind.get(pair)
+        assert edges.open, "a frozen graph's edges do not change"
+        old = self._kind_of(a, b)
         if old is None:
-            successors = edges.successors[a]
-            if isinstance(successors, list):
-                successors.append((b, kind))
-            else:  # the vertex's first edge
-                edges.successors[a] = [(b, kind)]
-            edges.by_kind[kind].setdefault(a, []).append(b)
+            self.add_new_edge(a, b, kind)
         elif old != kind:
             edges.successors[a] = [(u, kind if u == b else k) for u, k in edges.successors[a]]
             edges.by_kind[old][a].remove(b)
             edges.by_kind[kind].setdefault(a, []).append(b)
-        edges.kind[pair] = kind
 
     def _partner(self, task: int, group: bool, divisible: bool) -> ExecutionPartner:
         """One shared partner record per (task, flags): a task appears in the partner list of
@@ -450,32 +441,32 @@ class TaskGraphBuilder(_Adjacency):
         ``v`` is linked to is read from its partner list, once per call: a set of every linked
         pair, kept while building, was the largest index of a large mission's construction."""
         edges = self._edges
-        kinds, ec = edges.kind, edges.ec
-        assert kinds is not None, "a frozen graph's edges do not change"
+        ec = edges.ec
+        assert edges.open, "a frozen graph's edges do not change"
         partner_v = self._partner(v, group, divisible)
         partners_of_v = ec.setdefault(v, [])
         linked = {p.task for p in partners_of_v}
+        # no AND, OR or CD edge joins two tasks (their successors are their decompositions, and
+        # context dependencies start at decompositions): the partner list is all there is to see
         for t in tasks:  # add_ec(t, v, ...) for each, inlined: a million calls on large missions
-            if t not in linked and t << 32 | v not in kinds:
+            if t not in linked:
                 ec.setdefault(t, []).append(partner_v)
                 partners_of_v.append(self._partner(t, group, divisible))
                 linked.add(t)
 
     def release_lookups(self) -> None:
-        """Drop the indexes that look edges up (by kind, by vertex pair, decompositions by
+        """Drop the indexes that look edges up (by kind, decompositions by
         task), keeping the vertices and their successor lists, for a graph that is only walked
         from now on: the untrimmed graph, walked once more for its execution constraints while
         the trimmed one takes them.  It takes no more edges."""
         self._edges.by_kind = {kind: {} for kind in EdgeKind}
-        self._edges.kind = None
+        self._edges.open = False
         self._edges.decompositions = {}
 
     def freeze(self, *, unique_branch: bool = False) -> TaskGraph:
-        """The finished graph.  The kinds by vertex pair, which only spare the construction
-        rules a look through the successor lists, are dropped (an int per edge), and the
-        successors of one kind are read from the lists by kind."""
+        """The finished graph, whose successors of one kind are read from the lists by kind."""
         edges = self._edges
-        edges.kind = None
+        edges.open = False
         for v, successors in enumerate(edges.successors):
             same = _same_kind(successors, edges.by_kind, v)
             if same is not None:
