@@ -455,10 +455,10 @@ class TaskGraphBuilder(_Adjacency):
                 linked.add(t)
 
     def release_lookups(self) -> None:
-        """Drop the indexes that look edges up (by kind, decompositions by
-        task), keeping the vertices and their successor lists, for a graph that is only walked
-        from now on: the untrimmed graph, walked once more for its execution constraints while
-        the trimmed one takes them.  It takes no more edges."""
+        """Drop the indexes that look edges up (by kind, decompositions by task), keeping the
+        vertices and their successor lists, for a graph that is only walked from now on: the
+        untrimmed graph, walked once more for its execution constraints while the trimmed one
+        takes them.  It takes no more edges."""
         self._edges.by_kind = {kind: {} for kind in EdgeKind}
         self._edges.open = False
         self._edges.decompositions = {}
