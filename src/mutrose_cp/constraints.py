@@ -62,10 +62,7 @@ class Constraints(Sequence[Constraint]):
         self.extend(constraints)
 
     def append(self, c: Constraint) -> None:
-        self._kinds.append(_KIND_CODE[c.kind])
-        self._firsts.append(c.first)
-        self._seconds.append(c.second)
-        self._flags.append(c.group | c.divisible << 1)
+        self.append_row(_row_of(c))
 
     def extend(self, constraints: Iterable[Constraint]) -> None:
         for c in constraints:
@@ -187,7 +184,12 @@ def constraint_rows(constraints: Iterable[Constraint]) -> Iterator[tuple[int, in
     gives its own, any other sequence is converted."""
     if isinstance(constraints, Constraints):
         return constraints.rows()
-    return ((_KIND_CODE[c.kind], c.first, c.second, c.group | c.divisible << 1) for c in constraints)
+    return map(_row_of, constraints)
+
+
+def _row_of(c: Constraint) -> tuple[int, int, int, int]:
+    """The stored row of a constraint (see :meth:`Constraints.rows`)."""
+    return _KIND_CODE[c.kind], c.first, c.second, c.group | c.divisible << 1
 
 
 def constraint_of_row(row: tuple[int, int, int, int]) -> Constraint:

@@ -98,8 +98,7 @@ class _Walker:
         self.counters: dict[int, int] = {}  # depth -> current forAll index (1-based)
         self.events: dict[int, str] = {}  # depth -> trigger event text
         self.instances: list[TaskInstance] = []
-        self._robot_numbers: dict[str, RobotNumber] = {}  # inferred, by abstract task
-        self._robot_numbers_of_goals: dict[str, RobotNumber] = {}  # by goal-model task, one record per value
+        self._robot_numbers: dict[str, RobotNumber] = {}  # by goal-model task, one record per value
         self.var_mapping: dict[str, list[tuple[str, str]]] = {}
         for vm in config.var_mapping:
             self.var_mapping.setdefault(vm.task_id, []).extend(vm.pairs)
@@ -109,23 +108,16 @@ class _Walker:
                 self.declared_types.setdefault(d.name, d.type)
 
     # -- helpers -----------------------------------------------------------------------------
-    def _inferred_robot_number(self, task_name: str) -> RobotNumber:
-        """:func:`infer_robot_number`, once per abstract task: its instances share the value
-        (thousands of equal records otherwise)."""
-        robots = self._robot_numbers.get(task_name)
-        if robots is None:
-            robots = self._robot_numbers[task_name] = infer_robot_number(self.domain, task_name)
-        return robots
-
     def _robot_number(self, node: GMNode, task_name: str) -> RobotNumber:
-        """The robot number of ``node``'s instances, one record per value in the whole mission:
-        execution-constrained tasks that share it agree without a check (a million linked pairs
-        on large missions, see ``constraints``)."""
-        robots = self._robot_numbers_of_goals.get(node.id)
+        """The robot number of ``node``'s instances (given, or inferred from the HDDL task once
+        per goal-model task), one record per value in the whole mission: thousands of instances
+        share it, and execution-constrained tasks that share it agree without a check (a million
+        linked pairs on large missions, see ``constraints``)."""
+        robots = self._robot_numbers.get(node.id)
         if robots is None:
-            value = node.robot_number or self._inferred_robot_number(task_name)
-            same = next((r for r in self._robot_numbers_of_goals.values() if r == value), value)
-            robots = self._robot_numbers_of_goals[node.id] = same
+            value = node.robot_number or infer_robot_number(self.domain, task_name)
+            same = next((r for r in self._robot_numbers.values() if r == value), value)
+            robots = self._robot_numbers[node.id] = same
         return robots
 
     def _enter(self, depth: int) -> None:

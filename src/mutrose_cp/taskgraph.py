@@ -191,7 +191,7 @@ def _final_context_edges(tg: TaskGraphBuilder, cd_edges: list[tuple[int, int]]) 
                 if u not in seen:
                     seen.add(u)
                     stack.append(u)
-        linked = {u for u, _kind in tg.successors(d)} | {p.task for p in tg.ec_partners(d)}
+        linked = {u for u, _kind in tg.successors(d)}  # (execution constraints come later, between tasks)
         for t in sorted(targets):
             if t not in linked:  # one decomposition can enable the tasks of every forAll copy
                 tg.add_new_edge(d, t, CD)

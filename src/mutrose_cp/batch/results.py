@@ -108,17 +108,16 @@ class InputHasher:
         from ..io.config import load_configuration
         from ..mission import resolve_config_path
 
+        def read() -> Path:
+            return resolve_config_path(load_configuration(config, lenient=lenient).world_db.path, config)
+
         try:
             st = os.stat(config)
         except OSError:  # the reader says what is wrong with it
-            st = None
-        key = (os.path.realpath(config), st.st_size, st.st_mtime_ns, lenient) if st else None
-        if key is None or key not in self._worlds:
-            cfg = load_configuration(config, lenient=lenient)
-            world = resolve_config_path(cfg.world_db.path, config)
-            if key is None:
-                return world
-            self._worlds[key] = world
+            return read()
+        key = (os.path.realpath(config), st.st_size, st.st_mtime_ns, lenient)
+        if key not in self._worlds:
+            self._worlds[key] = read()
         return self._worlds[key]
 
     def _digest(self, name: str) -> str:
