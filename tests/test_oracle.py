@@ -51,3 +51,18 @@ def test_every_listed_decomposition_validates(shape):
         _listed_decompositions_validate(spec)
 
     check()
+
+
+def test_numeric_preconditions_no_value_meets_together():
+    """Found by the oracle: a method requiring (= (level ?rm) 0) and (> (level ?rm) 0) of a room
+    whose level the world does not know (its action tells it from the other method).  Each comparison alone holds there, but no value meets
+    both: neither decomposer may list the method, and the validator rejects it in either order."""
+    for pre in ((missiongen.Cmp("=", 0), missiongen.Cmp(">", 0)), (missiongen.Cmp(">", 0), missiongen.Cmp("=", 0))):
+        task = missiongen.Task("TaskB", (missiongen.Method("mB0", (missiongen.Cmp(">", 0),), ("act0",)),
+                                         missiongen.Method("mB1", pre, ("act1",))))
+        rooms = (missiongen.Room("Room1", True, (("lit", None),), None),)
+        actions = (missiongen.Action("act0"), missiongen.Action("act1"))
+        spec = missiongen.MissionSpec(("lit",), (), actions, (task,), rooms, True, "",
+                                      missiongen.GoalNode((missiongen.TaskNode("TaskB"),)))
+        _listed_decompositions_validate(spec)
+        assert missiongen.load_mission(spec).decomposition_space().count == 1

@@ -227,6 +227,28 @@ def test_a_decomposition_that_contradicts_itself_never_holds():
     assert not ground_preconditions_hold(tg.decomposition(both).decomposition, State({}, {}))
 
 
+@pytest.mark.parametrize("tests,contradicts", [
+    ((("=", 0), (">", 0)), True),
+    (((">", 0), ("=", 0)), True),
+    (((">", 2), ("<", 1)), True),
+    (((">", 1), ("<", 1)), True),
+    (((">=", 1), ("<=", 1)), False),
+    (((">=", 1), ("<=", 1), ("<>", 1)), True),
+    ((("=", 1), ("=", 1.0)), False),
+    ((("=", 1), ("=", 2)), True),
+    (((">", 0), (">", 3), ("<", 5)), False),
+    ((("=", 4), (">", 3), ("<", 5)), False),
+])
+def test_numeric_preconditions_that_allow_no_value_together_contradict(tests, contradicts):
+    """The world need not know the value: no value meets (= 0) and (> 0), in either order."""
+    g = Graph()
+    compare = tuple(Comparison("level", ("x",), op, value) for op, value in tests)
+    (d,) = g.task("AT1_1", g.op(";"), needs(compare=compare))
+    dec = g.freeze().decomposition(d).decomposition
+    assert contradicts_itself(dec) == contradicts
+    assert ground_preconditions_hold(dec, State({}, {})) != contradicts
+
+
 # --- parallel conflicts (§7.3) ------------------------------------------------------------------------
 
 

@@ -609,6 +609,23 @@ def test_replay_numeric_values():
     assert replay.failures == ["precondition battery(r1) > 9 of action lift (action 3) does not hold: the value is 7"]
 
 
+def test_replay_numeric_preconditions_on_an_unknown_value_must_allow_one_value_together():
+    """Whatever their order: (> 0) then (= 0) cannot hold, nor (> 3), an increase by 2, then
+    (< 4) (the start value would be above 3 and below 2); (> 0) then (< 5) can."""
+    from mutrose_cp.model import Comparison, NumericEffect
+
+    def level(op, value, position):
+        return _step(pre=[Comparison("level", ("?r",), op, value, False)], position=position, name="check")
+
+    assert len(_replayed([level(">", 0, 0), level("=", 0, 1)]).failures) == 1
+    assert len(_replayed([level("=", 0, 0), level(">", 0, 1)]).failures) == 1
+    assert _replayed([level(">", 0, 0), level("<", 5, 1)]).failures == []
+    raised = _replayed([level(">", 3, 0), _step(num=[NumericEffect("increase", "level", ("?r",), 2)], position=1),
+                        level("<", 4, 2)])
+    assert raised.failures == ["precondition level(r1) < 4 of action check (action 3) cannot hold together with the "
+                               "task's earlier preconditions on it (the world does not know it)"]
+
+
 def test_replay_skips_conditions_on_unbound_variables():
     from mutrose_cp.model import Literal
 

@@ -19,6 +19,7 @@ CP-SAT encoder posts the same rules as clauses over choice literals.
 from __future__ import annotations
 
 import itertools
+import math
 from bisect import bisect_left
 from dataclasses import dataclass
 from functools import cached_property
@@ -137,7 +138,9 @@ class ConstraintIndex:
 
 def contradicts_itself(dec: Decomposition) -> bool:
     """Whether ``dec`` can never run: two ground boolean preconditions require opposite values
-    of one atom, or a step's precondition is undone by an earlier step of the same path.
+    of one atom, ground numeric preconditions on one function allow no value together (``(=
+    (level ?rm) 0)`` and ``(> (level ?rm) 0)``), or a step's precondition is undone by an
+    earlier step of the same path.
 
     The ground preconditions that remain after grounding (§2.5) all speak of the state in which
     the decomposition starts, so such a decomposition can never be executed, whatever the
@@ -147,11 +150,46 @@ def contradicts_itself(dec: Decomposition) -> bool:
     if dec.predicates.unsatisfiable:
         return True  # an earlier step of its own path undoes a later step's precondition
     required: dict[AtomKey, bool] = {}
-    for c in dec.predicates.preconditions:
-        if isinstance(c, Literal) and is_ground(c.args):
+    ranges: dict[AtomKey, _Range] = {}
+    for c in dec.predicates.checked_preconditions:
+        if not is_ground(c.args):
+            continue
+        if isinstance(c, Literal):
             if required.setdefault((c.predicate, c.args), c.positive) != c.positive:
                 return True
+        elif not ranges.setdefault((c.function, c.args), _Range()).narrow(c.op, c.value):
+            return True
     return False
+
+
+class _Range:
+    """The values a function may have for the numeric preconditions seen so far: an interval
+    (each end open or closed), or one value; read the way preconditions are evaluated
+    (:func:`compare`, ``negated`` ignored as by the original)."""
+
+    def __init__(self) -> None:
+        self.low, self.low_open = -math.inf, True
+        self.high, self.high_open = math.inf, True
+        self.value: float | None = None
+        self.tests: list[tuple[str, float]] = []
+
+    def narrow(self, op: str, bound: float) -> bool:
+        """Add ``value op bound``; False when no value is left."""
+        self.tests.append((op, bound))
+        if op == "=":
+            if self.value is None:
+                self.value = bound
+        elif op in (">", ">="):
+            if bound > self.low or (bound == self.low and op == ">"):
+                self.low, self.low_open = bound, op == ">"
+        elif op in ("<", "<="):
+            if bound < self.high or (bound == self.high and op == "<"):
+                self.high, self.high_open = bound, op == "<"
+        if self.value is not None:
+            return all(compare(self.value, o, b) for o, b in self.tests)
+        if self.low > self.high or (self.low == self.high and (self.low_open or self.high_open)):
+            return False
+        return not (self.low == self.high and any(o == "<>" and compare(self.low, "=", b) for o, b in self.tests))
 
 
 def context_enablers(tg: TaskGraph) -> dict[int, set[int]]:

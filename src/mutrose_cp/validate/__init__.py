@@ -115,6 +115,15 @@ class TaskEffects:
                 state.values[key] += amount if kind == "increase" else -amount
 
 
+def _some_value_meets(required: list[tuple[str, float, bool]]) -> bool:
+    """Whether some number meets every (op, bound, negated) test.  The numbers that meet them
+    are a union of intervals and points between the bounds, so trying each bound, a point
+    between each two and one beyond each end decides it."""
+    bounds = sorted({bound for _, bound, _ in required})
+    candidates = bounds + [(a + b) / 2 for a, b in zip(bounds, bounds[1:])] + [bounds[0] - 1, bounds[-1] + 1]
+    return any(all(_compare(x, op, bound) != negated for op, bound, negated in required) for x in candidates)
+
+
 def _compare(value: float, op: str, bound: float) -> bool:
     return {
         "=": lambda: abs(value - bound) < EPSILON,
@@ -173,6 +182,10 @@ class _StepReplay:
         self.facts: dict[AtomKey, bool] = {}  # changed facts
         self.assumed: dict[AtomKey, bool] = {}
         self.nums: dict[AtomKey, float | None] = {}  # function values known or changed here
+        # a function nothing knows: what the steps required of its value where the task
+        # starts (op, bound, negated), and what they added to it since
+        self.required: dict[AtomKey, list[tuple[str, float, bool]]] = {}
+        self.offset: dict[AtomKey, float] = {}
         self.failures: list[str] = []
 
     def step(self, step: Step) -> None:
@@ -204,11 +217,18 @@ class _StepReplay:
                                  f"(action {position + 1}) does not hold")
 
     def _comparison(self, c: Comparison, g: tuple[str, ...], what: str, position: int) -> None:
-        """A numeric precondition; an unknown value is taken from a required equality."""
+        """A numeric precondition; a value nothing knows may be anything that the task's
+        preconditions on it allow together, and a required equality makes it known."""
         key = (c.function, g)
         value = self._value(key)
         if value is None:
-            if c.op == "=" and not c.negated:
+            required = self.required.setdefault(key, [])
+            required.append((c.op, float(c.value) - self.offset.get(key, 0.0), c.negated))
+            if not _some_value_meets(required):
+                self.failures.append(f"precondition {'not ' if c.negated else ''}{c.function}({', '.join(g)}) "
+                                     f"{c.op} {c.value:g} of {what} (action {position + 1}) cannot hold together "
+                                     f"with the task's earlier preconditions on it (the world does not know it)")
+            elif c.op == "=" and not c.negated:
                 self.nums[key] = float(c.value)
             return
         if _compare(value, c.op, float(c.value)) == c.negated:
@@ -219,10 +239,13 @@ class _StepReplay:
     def _numeric_effect(self, n: NumericEffect, key: AtomKey) -> None:
         """An assignment sets the value; an increase or decrease changes a known value only."""
         old = self._value(key)
+        change = n.amount if n.kind == "increase" else -n.amount
         if n.kind == "assign":
             self.nums[key] = float(n.amount)
         elif old is not None:
-            self.nums[key] = old + (n.amount if n.kind == "increase" else -n.amount)
+            self.nums[key] = old + change
+        else:
+            self.offset[key] = self.offset.get(key, 0.0) + change
         self.changed.numeric.append((key, n.kind, float(n.amount)))
 
 
