@@ -8,7 +8,7 @@ whose vertex order fixes the output keys ``t0, t1, ...``.  The types are in
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Callable, Sequence
+from typing import Callable, Collection, Sequence
 
 from .annotation_tree import GOAL, MEANSEND, TASK, RatNode
 from .conditions import Test, holds, translate
@@ -27,6 +27,7 @@ from .model.task_graph import (
     TaskGraphBuilder,
     TaskVertex,
 )
+from .stamping import Stamper, plan_stamping
 
 AND, OR, CD, EC = EdgeKind.AND, EdgeKind.OR, EdgeKind.CD, EdgeKind.EC
 
@@ -47,6 +48,14 @@ class _Builder:
         # every enabled creation condition from a scope vertex up to the root, innermost first:
         # a task below must meet them all where it starts
         self.contexts_in_scope: dict[int, tuple[Test, ...]] = {}
+        # for stamping (mutrose_cp.stamping): the forAll copies left out (by id of their RAT
+        # node), the vertex range of each copy built, the RAT node of each vertex (a
+        # decomposition's: its task's), and whether a false context made the build search it
+        self.skip: frozenset[int] = frozenset()
+        self.copy_ranges: dict[int, tuple[int, int]] = {}
+        self.origins: list[RatNode] = []
+        self.searched = False
+        self.copy_states: dict[int, WalkState] = {}  # first vertex of a copy -> the EC walk's state there
 
     def build(self) -> tuple[TaskGraphBuilder, list[tuple[int, int]]]:
         """The initial graph and its CD edges to redirect (§5.3); the builder's per-vertex maps
@@ -72,8 +81,15 @@ class _Builder:
         vertex = self._scope_vertex(node, parent, edge)
         if vertex is None:
             return  # a false context that nothing enables: the branch disappears
-        for child in node.children:
-            self._visit(child, vertex, node)
+        if not (node.is_forall_dummy and self.skip):
+            for child in node.children:
+                self._visit(child, vertex, node)
+            return
+        for child in node.children:  # forAll copies, some left out to be stamped
+            if id(child) not in self.skip:
+                start = self.tg.next_index
+                self._visit(child, vertex, node)
+                self.copy_ranges[id(child)] = (start, self.tg.next_index)
 
     def _scope_vertex(self, node: RatNode, parent: ScopeVertex | None, edge: EdgeKind) -> ScopeVertex | None:
         """The operator or means-end goal vertex of ``node``, added to the graph below ``parent``
@@ -107,6 +123,7 @@ class _Builder:
             self.tg.add(vertex)
         else:
             self.tg.add_child(vertex, edge)
+        self.origins.append(node)
         self.cd_edges.extend((d, vertex.index) for d in pending)
         self.contexts_in_scope[vertex.index] = contexts + (self.contexts_in_scope[parent.index] if parent else ())
         return vertex
@@ -125,16 +142,20 @@ class _Builder:
         flags = {"group": parent.group, "divisible": parent.divisible}
         tv = tg.add_child(TaskVertex(index=tg.next_index, parent=parent.index, content=inst.id, instance=inst,
                                      contexts=self.contexts_in_scope[parent.index], **flags), edge)
+        origins = self.origins
+        origins.append(node)
         binding = inst.binding
         for n, path in enumerate(self.paths[inst.name], start=1):
             dec = Decomposition(f"{inst.id}|{n}", inst, n, path, ground_path(path, binding))
             tg.add_child(DecompositionVertex(index=tg.next_index, parent=tv.index, content=dec.id,
                                              decomposition=dec, **flags), AND)
+            origins.append(node)
 
     def _enabled(self, test: Test, parent: ScopeVertex | None, pending: list[int]) -> bool:
         """Search the already-built graph for tasks that can make a false context true (§5.2);
         the enabling decompositions below a parallel operator go to ``pending`` (CD edges)."""
         tg = self.tg
+        self.searched = True
         visited: set[int] = set()
 
         def search(v: int, par: bool) -> bool:
@@ -198,6 +219,10 @@ def _final_context_edges(tg: TaskGraphBuilder, cd_edges: list[tuple[int, int]]) 
                 linked.add(t)
 
 
+# where the walk of §5.4 stands: the active scope, the scopes it suspends, the tasks met in it
+WalkState = tuple[int | None, tuple[int, ...], tuple[int, ...]]
+
+
 class _ExecutionScopes:
     """The walk of §5.4 in vertex order: the active Group/Divisible scope (a stack of nested
     ones whose enclosing scope allows it), the tasks already met in it, and the snapshots that
@@ -258,16 +283,23 @@ class _ExecutionScopes:
 
 
 def _execution_constraint_edges(tg: TaskGraphBuilder,
-                                link: Callable[[Sequence[int], int, bool, bool], None] | None = None) -> None:
+                                link: Callable[[Sequence[int], int, bool, bool], None] | None = None,
+                                watched: Collection[int] = ()) -> dict[int, WalkState]:
     """EC edges from Group/Divisible with the original's priority rules (§5.4), walked on the
-    untrimmed graph (whose scopes decide them) and added by ``link`` (default: into ``tg``)."""
+    untrimmed graph (whose scopes decide them) and added by ``link`` (default: into ``tg``).
+    Returns the state the walk meets each ``watched`` vertex in (the first vertices of forAll
+    copies, for stamping: the walk carries scopes from one copy into the next)."""
     scopes = _ExecutionScopes(tg, link or tg.add_ec_to_all)
+    states: dict[int, WalkState] = {}
     for v, vx in enumerate(tg.vertices):
         scopes.leave_finished(vx.parent)
+        if v in watched:
+            states[v] = (scopes.active, tuple(scopes.stack), tuple(scopes.tasks))
         if isinstance(vx, ScopeVertex):
             scopes.enter_scope(v, vx)
         elif isinstance(vx, TaskVertex):
             scopes.meet_task(v)
+    return states
 
 
 def _is_unique_branch(tg: TaskGraphBuilder) -> bool:
@@ -373,22 +405,56 @@ class _Trimmer:
 
 
 def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
-                     paths: dict[str, list[DecompositionPath]]) -> TaskGraph:
-    """Build, connect and trim the Task Graph of an expanded mission."""
-    tg, cd_edges = _Builder(exp, gm, config, state, paths).build()
+                     paths: dict[str, list[DecompositionPath]], *, stamp: bool = True) -> TaskGraph:
+    """Build, connect and trim the Task Graph of an expanded mission.  With ``stamp``, forAll
+    copies identical up to renaming are built once and stamped where that gives the same graph
+    (:func:`stamped_task_graph`)."""
+    if stamp:
+        stamped = stamped_task_graph(exp, gm, config, state, paths)
+        if stamped is not None:
+            return stamped
+    graph, trimmer = _connected(_Builder(exp, gm, config, state, paths))
+    return graph.freeze(unique_branch=trimmer is None)
+
+
+def stamped_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state: InitialState,
+                       paths: dict[str, list[DecompositionPath]]) -> TaskGraph | None:
+    """The Task Graph built with the first copies of each shape of the forAll goals that allow
+    it and stamped for the others (:mod:`mutrose_cp.stamping`), or None when no forAll allows
+    it or a rule of stamping fails on the reduced graph."""
+    builder = _Builder(exp, gm, config, state, paths)
+    plan = plan_stamping(exp.rat, builder.instances, gm, paths)
+    if plan is None:
+        return None
+    builder.skip = plan.skipped
+    reduced, trimmer = _connected(builder)
+    if trimmer is None or builder.searched:
+        return None
+    stamped = Stamper(plan, reduced, trimmer.index, builder.origins, builder.copy_ranges, builder.copy_states,
+                      builder.instances).stamp()
+    return None if stamped is None else stamped.freeze()
+
+
+def _connected(builder: _Builder) -> tuple[TaskGraphBuilder, _Trimmer | None]:
+    """The graph of ``builder`` with its context dependencies and execution constraints, trimmed
+    (§5.5) with the trimmer that did it; a unique-branch graph is neither trimmed nor expanded
+    (§7.7), and comes with None.  The walk's state at the first vertex of each forAll copy
+    built goes to ``builder.copy_states``."""
+    tg, cd_edges = builder.build()
     if not tg.vertices:
         raise MissionError("the mission has no task: every branch was removed or no task instance exists",
-                           gm.source)
+                           builder.gm.source)
     _final_context_edges(tg, cd_edges)
     if _is_unique_branch(tg):
         _execution_constraint_edges(tg)
-        return tg.freeze(unique_branch=True)  # the original neither trims nor expands these (§7.7)
-    _expand_recursions(tg, state)
+        return tg, None
+    _expand_recursions(tg, builder.state)
     trimmer = _Trimmer(tg)
     trimmed = trimmer.trim()
     tg.release_lookups()  # the walk reads the untrimmed vertices and successors while the trimmed graph fills
-    _execution_constraint_edges(tg, trimmer.link_kept)
-    return trimmed.freeze()
+    builder.copy_states = _execution_constraint_edges(tg, trimmer.link_kept,
+                                                      {start for start, _ in builder.copy_ranges.values()})
+    return trimmed, trimmer
 
 
 def _expand_recursions(tg: TaskGraphBuilder, state: InitialState) -> None:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from operator import attrgetter
 from enum import StrEnum
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterator, Mapping, NamedTuple, Self, Sequence, overload
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, Iterator, Mapping, NamedTuple, Self, Sequence, overload
 
 if TYPE_CHECKING:  # the types of the stages that produce a vertex's content
     from ..conditions import Test
@@ -74,6 +74,14 @@ class _Vertex:
             object.__setattr__(new, name, value)
         object.__setattr__(new, "index", index)
         object.__setattr__(new, "parent", parent)
+        return new
+
+    def stamped(self, index: int, parent: int, **content: Any) -> Self:
+        """The same vertex at another position with other content: a vertex of a forAll copy
+        made from the same vertex of an identical copy (:mod:`mutrose_cp.stamping`)."""
+        new = self.moved(index, parent)
+        for name, value in content.items():
+            object.__setattr__(new, name, value)
         return new
 
 
@@ -282,6 +290,10 @@ class _Adjacency:
             return True
         return any(p.task == b for p in self._edges.ec.get(a, ()))
 
+    def execution_partners(self) -> Iterable[tuple[int, list[ExecutionPartner]]]:
+        """Each task's EC partners, tasks in the order their first constraint was added."""
+        return self._edges.ec.items()
+
     def ec_partners(self, v: int) -> list[ExecutionPartner]:
         """EC partners of task ``v`` with the constraint's flags, in the order they were added."""
         return self._edges.ec.get(v, [])
@@ -421,7 +433,7 @@ class TaskGraphBuilder(_Adjacency):
             edges.by_kind[old][a].remove(b)
             edges.by_kind[kind].setdefault(a, []).append(b)
 
-    def _partner(self, task: int, group: bool, divisible: bool) -> ExecutionPartner:
+    def partner(self, task: int, group: bool, divisible: bool) -> ExecutionPartner:
         """One shared partner record per (task, flags): a task appears in the partner list of
         every task it is constrained with, so sharing saves most of the records."""
         key = (task, group, divisible)
@@ -432,8 +444,13 @@ class TaskGraphBuilder(_Adjacency):
 
     def add_ec(self, a: int, b: int, group: bool, divisible: bool) -> None:
         """An execution constraint between task vertices ``a`` and ``b`` (both directions)."""
-        self._edges.ec.setdefault(a, []).append(self._partner(b, group, divisible))
-        self._edges.ec.setdefault(b, []).append(self._partner(a, group, divisible))
+        self._edges.ec.setdefault(a, []).append(self.partner(b, group, divisible))
+        self._edges.ec.setdefault(b, []).append(self.partner(a, group, divisible))
+
+    def set_partners(self, task: int, partners: list[ExecutionPartner]) -> None:
+        """The execution partners of ``task``, in order: those of a stamped forAll copy, made
+        from those of the copy it was stamped from."""
+        self._edges.ec[task] = partners
 
     def add_ec_to_all(self, tasks: Sequence[int], v: int, group: bool, divisible: bool) -> None:
         """Execution constraints between task ``v`` and each of ``tasks`` it is not yet linked to,
@@ -443,7 +460,7 @@ class TaskGraphBuilder(_Adjacency):
         edges = self._edges
         ec = edges.ec
         assert edges.open, "a frozen graph's edges do not change"
-        partner_v = self._partner(v, group, divisible)
+        partner_v = self.partner(v, group, divisible)
         partners_of_v = ec.setdefault(v, [])
         linked = {p.task for p in partners_of_v}
         # no AND, OR or CD edge joins two tasks (their successors are their decompositions, and
@@ -451,7 +468,7 @@ class TaskGraphBuilder(_Adjacency):
         for t in tasks:  # add_ec(t, v, ...) for each, inlined: a million calls on large missions
             if t not in linked:
                 ec.setdefault(t, []).append(partner_v)
-                partners_of_v.append(self._partner(t, group, divisible))
+                partners_of_v.append(self.partner(t, group, divisible))
                 linked.add(t)
 
     def release_lookups(self) -> None:

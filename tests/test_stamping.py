@@ -1,0 +1,223 @@
+"""Template stamping of forAll copies gives the Task Graph of the full construction.
+
+``stamped_task_graph`` builds a few copies of each forAll and stamps the others; it must give
+exactly the graph ``build_task_graph(..., stamp=False)`` gives (vertices with their content,
+edges and partner lists in order, carried achieve goals), or None where its rules rule it out.
+
+* random missions from ``missiongen`` with their rooms repeated (so that forAll goals have
+  three copies or more, most of them identical up to renaming) and some rooms of their own;
+  a seeded run checks that stamping is really used on a fair share of them;
+* every configuration of the reference corpus, and the vital-signs, delivery and pickup
+  benchmark worlds (where stamping must be used);
+* the rules that rule stamping out: a creation condition inside the copies, and an execution
+  scope above the forAll (whose constraints join the copies).
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, event, given, seed, settings
+from hypothesis import strategies as st
+
+from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.model.task_graph import TaskGraph
+from mutrose_cp.stamping import plan_stamping
+from mutrose_cp.taskgraph import build_task_graph, stamped_task_graph
+
+from conftest import ROOT, require_reference
+from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission, missions
+
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from generate import generate  # noqa: E402
+
+EXAMPLES = int(os.environ.get("MUTROSE_STAMP_EXAMPLES", "60"))
+
+
+def _stages(m: Mission) -> tuple:
+    return m.expansion, m.goal_model, m.config, m.initial_state, m.paths
+
+
+def _same_graph(a: TaskGraph, b: TaskGraph) -> None:
+    """Equal vertices, successor lists, partner lists (in the order added) and carried achieve
+    goals: what every later stage reads."""
+    assert len(a.vertices) == len(b.vertices)
+    for x, y in zip(a.vertices, b.vertices):
+        assert x == y
+    assert [list(s) for s in a._edges.successors] == [list(s) for s in b._edges.successors]
+    assert list(a.execution_partners()) == list(b.execution_partners())
+    assert list(a.achieve_carried.items()) == list(b.achieve_carried.items())
+    assert a.unique_branch == b.unique_branch
+    assert a.decomposition_keys == b.decomposition_keys
+
+
+def _agree(m: Mission) -> bool:
+    """Whether stamping was used; either way the graph is the full construction's."""
+    full = build_task_graph(*_stages(m), stamp=False)
+    stamped = stamped_task_graph(*_stages(m))
+    if stamped is not None:
+        _same_graph(full, stamped)
+    _same_graph(full, build_task_graph(*_stages(m)))
+    return stamped is not None
+
+
+@st.composite
+def _repeated_rooms(draw) -> MissionSpec:
+    """A random mission whose rooms are repeated under new names (identical copies), with one
+    more room of its own now and then (a copy of another shape)."""
+    spec = draw(missions())
+    rooms = list(spec.rooms)
+    for k in range(draw(st.integers(2, 5))):
+        room = draw(st.sampled_from(spec.rooms))
+        rooms.append(dataclasses.replace(room, name=f"Room{len(rooms) + 1}"))
+    if draw(st.booleans()):
+        facts = tuple((p, draw(st.sampled_from([None, True, False]))) for p, _ in spec.rooms[0].facts)
+        rooms.append(dataclasses.replace(spec.rooms[0], name=f"Room{len(rooms) + 1}", facts=facts, active=True))
+    return dataclasses.replace(spec, rooms=tuple(rooms))
+
+
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck))
+@given(_repeated_rooms())
+def test_stamped_graph_is_the_full_construction_on_random_missions(spec: MissionSpec) -> None:
+    try:
+        m = load_mission(spec)
+        m.expansion
+    except Exception as e:  # a drawn mission the expansion refuses has no graph to compare
+        event(f"refused: {type(e).__name__}")
+        return
+    event("stamped" if _agree(m) else "built in full")
+
+
+def test_stamping_is_used_on_random_missions() -> None:
+    """The property above is not vacuous: stamping is used on a fair share of the draws."""
+    used, drawn = [], []
+
+    @seed(20261201)
+    @settings(max_examples=40, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+    @given(_repeated_rooms())
+    def draw(spec: MissionSpec) -> None:
+        try:
+            m = load_mission(spec)
+            m.expansion
+        except Exception:
+            return
+        drawn.append(spec)
+        used.append(_agree(m))
+
+    draw()
+    assert len(drawn) >= 20
+    assert sum(used) >= len(drawn) // 4, (sum(used), len(drawn))
+
+
+def test_reference_corpus(monkeypatch: pytest.MonkeyPatch) -> None:
+    reference = require_reference()
+    configurations = sorted(c for c in (reference / "missions").glob("*/configuration/*")
+                            if c.suffix.lower() in (".json", ".xml"))
+    for cfg in configurations:
+        folder = cfg.parent.parent
+        monkeypatch.chdir(folder)  # configuration paths are relative to the mission folder
+        _agree(Mission.load(*find_mission_files(folder, cfg.name)))
+    assert len(configurations) >= 7
+
+
+@pytest.mark.parametrize("family,n", [("vital-signs", 12), ("delivery", 9), ("pickup", 9)])
+def test_benchmark_worlds_are_stamped(tmp_path: Path, family: str, n: int) -> None:
+    require_reference()
+    m = Mission.load(*generate(family, n, tmp_path))
+    assert _agree(m), "stamping was not used"
+
+
+def _vital_signs(tmp_path: Path, edit_goal_model=None, edit_world=None) -> Mission:
+    """Vital signs at 6 rooms (patients 2i+1 and 2i+2 in room i), with its goal model and
+    world text edited."""
+    hddl, gm, cfg = generate("vital-signs", 6, tmp_path)
+    if edit_goal_model is not None:
+        text = edit_goal_model(gm.read_text(encoding="utf-8"))
+        gm = tmp_path / "gm.txt"
+        gm.write_text(text, encoding="utf-8")
+    if edit_world is not None:
+        world = tmp_path / "vital-signs-6.xml"
+        world.write_text(edit_world(world.read_text(encoding="utf-8")), encoding="utf-8")
+    return Mission.load(hddl, gm, cfg)
+
+
+def test_a_creation_condition_inside_the_copies_rules_stamping_out(tmp_path: Path) -> None:
+    """A condition on a goal inside the copies that is false for one patient of the fifth room
+    only: the built rooms (the first two) never ask, the fifth room's graph loses the branch."""
+    m = _vital_signs(
+        tmp_path,
+        lambda t: t.replace('"CreationCondition": "assertion trigger \\"NoResponse\\""',
+                            '"CreationCondition": "assertion condition \\"current_patient.available\\""'),
+        lambda t: t.replace("<name>Patient9</name><infectious_disease>true</infectious_disease><diabetes>false</diabetes>"
+                            "<post_surgical>false</post_surgical><available>true",
+                            "<name>Patient9</name><infectious_disease>true</infectious_disease><diabetes>false</diabetes>"
+                            "<post_surgical>false</post_surgical><available>false"))
+    full = build_task_graph(*_stages(m), stamp=False)
+    alerts = [v.instance.id for v in full.tasks() if v.instance.name == "SendAlert"]
+    assert len(alerts) == 11 and "AT6_5_1" not in alerts, alerts
+    assert plan_stamping(m.expansion.rat, {i.id: i for i in m.expansion.instances}, m.goal_model, m.paths) is None
+    assert not _agree(m)
+
+
+def test_an_execution_scope_above_the_forall_rules_stamping_out(tmp_path: Path) -> None:
+    """With Group=False on the root goal, the rooms' tasks are constrained with each other."""
+    def root_not_group(text: str) -> str:
+        head, sep, rest = text.partition('"text": "G1: ')
+        return head + sep + rest.replace('"customProperties": {', '"customProperties": {\n            "Group": "False",', 1)
+
+    m = _vital_signs(tmp_path, root_not_group)
+    full = build_task_graph(*_stages(m), stamp=False)
+    assert any(p.task - t > 40 for t, ps in full.execution_partners() for p in ps), "the rooms are not joined"
+    assert plan_stamping(m.expansion.rat, {i.id: i for i in m.expansion.instances}, m.goal_model, m.paths) is not None
+    assert not _agree(m)
+
+
+def test_a_false_context_after_the_forall_rules_stamping_out(tmp_path: Path) -> None:
+    """G9 after the rooms needs the last room (current_room after the forAll) clean, which only
+    that room's task makes true: the built rooms (the first two) cannot enable it."""
+    clean = Task("TaskA", (Method("mA0", (), ("act0",)),))
+    rooms = tuple(Room(f"Room{i}", True, (("clean", False),), 0) for i in range(1, 5))
+    spec = MissionSpec(("clean",), (), (Action("act0", (), (Lit("clean", "?rm"),)),), (clean,), rooms, True, "",
+                       GoalNode((TaskNode("TaskA"),)))
+    hddl, gm, cfg = spec.write(tmp_path)
+    model = json.loads(gm.read_text(encoding="utf-8"))
+    nodes, links = model["actors"][0]["nodes"], model["links"]
+    root = next(n for n in nodes if n["text"].startswith("G1:"))
+    root["text"] = root["text"].replace("[G2;G3]", "[G2;G3;G9]")
+    nodes += [{"id": "g9", "text": "G9: Report", "type": "istar.Goal", "x": 900, "y": 170,
+               "customProperties": {"Description": "", "Monitors": "current_room",
+                                    "CreationCondition": 'assertion condition "current_room.is_clean"'}},
+              {"id": "at9", "text": "AT9: TaskA", "type": "istar.Task", "x": 1000, "y": 280,
+               "customProperties": {"Description": "", "Location": "current_room"}}]
+    links += [{"id": "l9", "type": "istar.AndRefinementLink", "source": "g9", "target": root["id"]},
+              {"id": "l10", "type": "istar.AndRefinementLink", "source": "at9", "target": "g9"}]
+    gm.write_text(json.dumps(model), encoding="utf-8")
+    m = Mission.load(hddl, gm, cfg)
+    full = build_task_graph(*_stages(m), stamp=False)
+    assert "AT9_1" in {v.content for v in full.tasks()}, "G9 is not enabled"
+    assert plan_stamping(m.expansion.rat, {i.id: i for i in m.expansion.instances}, m.goal_model, m.paths) is not None
+    assert not _agree(m)
+
+
+def test_a_scope_carried_from_copy_to_copy_rules_stamping_out() -> None:
+    """Each room is [AT1;G5;G6] with G5 Group=False and G6 (Divisible=False) ending in a
+    Group=False goal: the walk of the execution constraints leaves that scope open into the
+    next room, so the first room gets no constraints and the others do, although every room has
+    the same shape."""
+    tree = GoalNode((TaskNode("TaskA"),
+                     GoalNode((TaskNode("TaskA"),), group=False),
+                     GoalNode((TaskNode("TaskA"), GoalNode((TaskNode("TaskA"),), group=False)),
+                              refinement="or", divisible=False)),
+                    annotation=("flat", ";"))
+    task = Task("TaskA", (Method("mA0", (), ("act0",)),))
+    rooms = tuple(Room(f"Room{i}", True, (("clean", None),), 1) for i in range(1, 6))
+    m = load_mission(MissionSpec(("clean",), ("charged",), (Action("act0", (), ()),), (task,), rooms, False, "", tree))
+    full = build_task_graph(*_stages(m), stamp=False)
+    partners = {full.vertices[t].content: len(ps) for t, ps in full.execution_partners()}
+    assert partners["AT2_1"] == 0 and partners["AT2_2"] > 0 and partners["AT2_5"] == partners["AT2_2"]
+    assert plan_stamping(m.expansion.rat, {i.id: i for i in m.expansion.instances}, m.goal_model, m.paths) is not None
+    assert not _agree(m)
