@@ -66,3 +66,22 @@ def test_numeric_preconditions_no_value_meets_together():
                                       missiongen.GoalNode((missiongen.TaskNode("TaskB"),)))
         _listed_decompositions_validate(spec)
         assert missiongen.load_mission(spec).decomposition_space().count == 1
+
+
+def test_an_achieve_goal_inside_a_forall_is_checked_per_copy():
+    """Found by the oracle: G6 (level > 0) sits in each copy of the item forAll and its task
+    lowers the room's level by one.  With two items and level 2, each copy holds after its own
+    task (the copies run in parallel and do not see each other); the validator grouped both
+    copies by the condition's variables (only current_room) and checked them after both."""
+    m = missiongen
+    lower = m.Action("iact0", (), (m.Lit("tagged", "?it", False), m.Change("decrease", 1)), item=True)
+    task_i = m.Task("TaskI", (m.Method("mI1", (), ("iact0",)),), item=True)
+    task_a = m.Task("TaskA", (m.Method("mA0", (), ("act0",)),))
+    items_goal = m.GoalNode((m.TaskNode("TaskA"), m.GoalNode((m.TaskNode("TaskI"),), achieve="current_room.level > 0")),
+                            annotation=("flat", "#"), forall="")
+    tree = m.GoalNode((m.QueryNode(), items_goal), annotation=("flat", "#"))
+    rooms = (m.Room("Room1", True, (("clean", None),), 2, items=("Item2", "Item1")),)
+    spec = m.MissionSpec(("clean",), (), (m.Action("act0"), lower), (task_a, task_i), rooms, False, "", tree,
+                         item_predicates=("tagged",), items=(m.Item("Item1"), m.Item("Item2")))
+    assert m.load_mission(spec).decomposition_space().count == 1
+    _listed_decompositions_validate(spec)

@@ -608,19 +608,24 @@ class _Validator:
 
     def _after_groups(self, i: int, goal: GMNode, what: str, cond: Condition, below: list[OutputTask],
                       chosen: set[str], errors: list[Violation], group_by: str | None = None) -> None:
-        """Evaluate ``cond`` after the goal's tasks, once per binding of its variables."""
+        """Evaluate ``cond`` after the goal's tasks, once per copy of the goal (the forAll
+        elements above it: the leading numbers of its tasks' instance ids) and binding of the
+        condition's variables."""
         names = _variables(cond) | ({group_by} if group_by else set())
-        groups: dict[_BindingKey, list[OutputTask]] = {}
+        depth = sum(1 for n in self._ancestors(goal) if n.forall is not None)
+        groups: dict[tuple[tuple[str, ...], _BindingKey], list[OutputTask]] = {}
         unbound: list[OutputTask] = []
-        numbers: dict[str, _BindingKey] = {}  # instance number -> group of the tasks that bind the names
+        # instance number -> the group of its tasks that bind the names
+        numbers: dict[str, tuple[tuple[str, ...], _BindingKey]] = {}
         for t in below:
             b = self._binding(t)
             if not names <= b.keys():
                 unbound.append(t)
                 continue
-            key = tuple(sorted((n, b[n]) for n in names))
+            number = t.instance.partition("_")[2]
+            key = (tuple(number.split("_")[:depth]), tuple(sorted((n, b[n]) for n in names)))
             groups.setdefault(key, []).append(t)
-            numbers.setdefault(t.instance.partition("_")[2], key)
+            numbers.setdefault(number, key)
         if not groups:
             self._note(f"goal {goal.id}: the {what} uses {', '.join(sorted(names))}, which no task binds "
                        "(Location or var_mapping): not checked")
@@ -636,7 +641,7 @@ class _Validator:
                 replay = self._replays.get(k)
                 if replay is not None:
                     replay[0].apply(state)
-            self._check(i, goal, what, cond, dict(key), state, members[0].id, errors, after=True)
+            self._check(i, goal, what, cond, dict(key[1]), state, members[0].id, errors, after=True)
 
     def _check(self, i: int, goal: GMNode, what: str, cond: Condition, binding: dict[str, tuple[str, ...]],
                state: State | None, task: str, errors: list[Violation], after: bool = False) -> None:
