@@ -24,6 +24,7 @@ import pytest
 from hypothesis import HealthCheck, event, given, seed, settings
 from hypothesis import strategies as st
 
+from mutrose_cp.constraints import _stamped, generate_constraints
 from mutrose_cp.mission import Mission, find_mission_files
 from mutrose_cp.model.task_graph import TaskGraph
 from mutrose_cp.stamping import plan_stamping
@@ -56,11 +57,13 @@ def _same_graph(a: TaskGraph, b: TaskGraph) -> None:
 
 
 def _agree(m: Mission) -> bool:
-    """Whether stamping was used; either way the graph is the full construction's."""
+    """Whether stamping was used; either way the graph is the full construction's, and so are
+    the constraints (made from the source copies' where stamped)."""
     full = build_task_graph(*_stages(m), stamp=False)
     stamped = stamped_task_graph(*_stages(m))
     if stamped is not None:
         _same_graph(full, stamped)
+        assert generate_constraints(stamped) == generate_constraints(full)
     _same_graph(full, build_task_graph(*_stages(m)))
     return stamped is not None
 
@@ -129,6 +132,7 @@ def test_benchmark_worlds_are_stamped(tmp_path: Path, family: str, n: int) -> No
     require_reference()
     m = Mission.load(*generate(family, n, tmp_path))
     assert _agree(m), "stamping was not used"
+    assert _stamped(m.task_graph) is not None, "the constraints were not stamped"
 
 
 def _vital_signs(tmp_path: Path, edit_goal_model=None, edit_world=None) -> Mission:
@@ -176,31 +180,50 @@ def test_an_execution_scope_above_the_forall_rules_stamping_out(tmp_path: Path) 
     assert not _agree(m)
 
 
-def test_a_false_context_after_the_forall_rules_stamping_out(tmp_path: Path) -> None:
-    """G9 after the rooms needs the last room (current_room after the forAll) clean, which only
-    that room's task makes true: the built rooms (the first two) cannot enable it."""
+def _rooms_then_g9(tmp_path: Path, rooms: int, context: str | None) -> Mission:
+    """G1 is [G2;G3;G9]: G3 cleans every room (TaskA), then G9's task (TaskA again, in the last
+    room: current_room after the forAll), with ``context`` as G9's creation condition."""
     clean = Task("TaskA", (Method("mA0", (), ("act0",)),))
-    rooms = tuple(Room(f"Room{i}", True, (("clean", False),), 0) for i in range(1, 5))
-    spec = MissionSpec(("clean",), (), (Action("act0", (), (Lit("clean", "?rm"),)),), (clean,), rooms, True, "",
+    listed = tuple(Room(f"Room{i}", True, (("clean", False),), 0) for i in range(1, rooms + 1))
+    spec = MissionSpec(("clean",), (), (Action("act0", (), (Lit("clean", "?rm"),)),), (clean,), listed, True, "",
                        GoalNode((TaskNode("TaskA"),)))
     hddl, gm, cfg = spec.write(tmp_path)
     model = json.loads(gm.read_text(encoding="utf-8"))
     nodes, links = model["actors"][0]["nodes"], model["links"]
     root = next(n for n in nodes if n["text"].startswith("G1:"))
     root["text"] = root["text"].replace("[G2;G3]", "[G2;G3;G9]")
+    properties = {"Description": "", "Monitors": "current_room"}
+    if context is not None:
+        properties["CreationCondition"] = f'assertion condition "{context}"'
     nodes += [{"id": "g9", "text": "G9: Report", "type": "istar.Goal", "x": 900, "y": 170,
-               "customProperties": {"Description": "", "Monitors": "current_room",
-                                    "CreationCondition": 'assertion condition "current_room.is_clean"'}},
+               "customProperties": properties},
               {"id": "at9", "text": "AT9: TaskA", "type": "istar.Task", "x": 1000, "y": 280,
                "customProperties": {"Description": "", "Location": "current_room"}}]
     links += [{"id": "l9", "type": "istar.AndRefinementLink", "source": "g9", "target": root["id"]},
               {"id": "l10", "type": "istar.AndRefinementLink", "source": "at9", "target": "g9"}]
     gm.write_text(json.dumps(model), encoding="utf-8")
-    m = Mission.load(hddl, gm, cfg)
+    return Mission.load(hddl, gm, cfg)
+
+
+def test_a_false_context_after_the_forall_rules_stamping_out(tmp_path: Path) -> None:
+    """G9 after the rooms needs the last room (current_room after the forAll) clean, which only
+    that room's task makes true: the built rooms (the first two) cannot enable it."""
+    m = _rooms_then_g9(tmp_path, 4, "current_room.is_clean")
     full = build_task_graph(*_stages(m), stamp=False)
     assert "AT9_1" in {v.content for v in full.tasks()}, "G9 is not enabled"
     assert plan_stamping(m.expansion.rat, {i.id: i for i in m.expansion.instances}, m.goal_model, m.paths) is not None
     assert not _agree(m)
+
+
+def test_constraints_joining_the_copies_to_a_later_task_are_not_stamped(tmp_path: Path) -> None:
+    """Every room's task comes before G9's: those SEQ constraints leave the copies, so the
+    constraints are generated in full (the graph is still stamped)."""
+    m = _rooms_then_g9(tmp_path, 5, None)
+    assert _agree(m)
+    assert _stamped(m.task_graph) is None
+    tg = m.task_graph
+    later = {(tg.vertices[c.first].content, tg.vertices[c.second].content) for c in m.constraints if c.kind == "SEQ"}
+    assert ("AT1_4|1", "AT9_1|1") in later
 
 
 def test_a_scope_carried_from_copy_to_copy_rules_stamping_out() -> None:

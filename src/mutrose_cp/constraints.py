@@ -101,6 +101,14 @@ class Constraints(Sequence[Constraint]):
         self._seconds.append(second)
         self._flags.append(flag)
 
+    def extend_shifted(self, other: "Constraints", lo: int, hi: int, shift: int) -> None:
+        """Append rows ``lo .. hi - 1`` of ``other`` with their vertices moved by ``shift``: a
+        stamped forAll copy's constraints, from those of the copy it was stamped from."""
+        self._kinds += other._kinds[lo:hi]
+        self._firsts.extend(map(shift.__add__, other._firsts[lo:hi]))
+        self._seconds.extend(map(shift.__add__, other._seconds[lo:hi]))
+        self._flags += other._flags[lo:hi]
+
     def __len__(self) -> int:
         return len(self._kinds)
 
@@ -198,7 +206,7 @@ def constraint_of_row(row: tuple[int, int, int, int]) -> Constraint:
     return Constraint(_KINDS[code], first, second, _GROUP[flags], _DIVISIBLE[flags])
 
 
-def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constraint]:
+def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool, skip: _Skip = None) -> list[Constraint]:
     """The constraint list of the operator subtree rooted at ``v`` (§6.1).
 
     Parallel pairs only matter when a sequential or fallback ancestor fans out over their
@@ -209,11 +217,13 @@ def _tree_constraints(tg: TaskGraph, v: int, pairs_needed: bool) -> list[Constra
     kind = {";": SEQ, "FALLBACK": FB}.get(vx.content, PAR)
     children: list[_Child] = []
     for u in tg.out(v, EdgeKind.AND, EdgeKind.OR):
+        if skip is not None and skip[u]:
+            continue
         ux = tg.vertices[u]
         if isinstance(ux, TaskVertex):
             children.append(u)
         elif isinstance(ux, OperatorVertex):
-            children.append(_tree_constraints(tg, u, pairs_needed or kind != PAR))
+            children.append(_tree_constraints(tg, u, pairs_needed or kind != PAR, skip))
     own = [p for i, j in _combinations(kind, len(children), pairs_needed) for p in _pairs(kind, children[i], children[j])]
     return _first_per_pair(kind, own, [c for c in children if isinstance(c, list)])
 
@@ -261,7 +271,7 @@ def _to_decompositions(tg: TaskGraph, task_constraints: list[Constraint], decs: 
     return out
 
 
-def _execution_constraints(tg: TaskGraph, decs: _Decompositions, out: Constraints) -> None:
+def _execution_constraints(tg: TaskGraph, decs: _Decompositions, out: Constraints, skip: _Skip = None) -> None:
     """§6.3: one EC per decomposition pair of every EC-linked task pair, added to ``out``.  The
     robot numbers of each linked pair are checked here, once per task pair (§6.5): every
     decomposition pair of it would fail alike, and the first failing pair is the first failing
@@ -273,6 +283,8 @@ def _execution_constraints(tg: TaskGraph, decs: _Decompositions, out: Constraint
     visited: set[int] = set()
     for task in tg.tasks():
         s, number = task.index, task.instance.robot_number
+        if skip is not None and skip[s]:
+            continue
         for t, group, divisible in tg.ec_partners(s):
             if t in visited:
                 continue
@@ -339,16 +351,103 @@ def _check_robot_numbers(tg: TaskGraph, s: int, t: int) -> None:
 
 
 def generate_constraints(tg: TaskGraph) -> Constraints:
-    """The final constraint list over decomposition vertices, in the original's order."""
-    out = Constraints()
+    """The final constraint list over decomposition vertices, in the original's order: those of
+    the operators (without the implied ones), then the execution constraints.  The forAll
+    copies the Task Graph stamped get the constraints of their source copies, moved
+    (:func:`_stamped`), where each copy's constraints stay inside it."""
+    if tg.stamped_copies:
+        stamped = _stamped(tg)
+        if stamped is not None:
+            return stamped
     decs = _Decompositions(tg)
+    constraints = _operator_constraints(tg, decs)
+    _execution_constraints(tg, decs, constraints)
+    return constraints
+
+
+_Skip = bytearray | None  # by vertex: 1 for the stamped copies left to :func:`_stamped`
+
+
+def _operator_constraints(tg: TaskGraph, decs: _Decompositions, skip: _Skip = None) -> Constraints:
+    """SEQ and FB (and PAR made SEQ) constraints between decompositions, without the implied ones."""
+    out = Constraints()
     if not tg.unique_branch:
         root = tg.vertices[0]
         if not isinstance(root, OperatorVertex):
             raise MissionError("Could not generate constraints: the Task Graph root is not an operator")
         has_cd = tg.has_edges_of_kind(EdgeKind.CD)
-        out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd), decs)
+        out = _to_decompositions(tg, _tree_constraints(tg, 0, has_cd, skip), decs)
     constraints = Constraints()
     _drop_implied(out, constraints)
-    _execution_constraints(tg, decs, constraints)
     return constraints
+
+
+def _stamped(tg: TaskGraph) -> Constraints | None:
+    """Both parts of the constraints generated without the copies stamped from another, each
+    with those copies' constraints made from their sources' in their places; None when a
+    constraint joins a copy to a vertex outside it, or a forAll's copies' constraints are not
+    one run, copy after copy (then a copy's constraints need not be its source's, moved)."""
+    skip = bytearray(len(tg.vertices))
+    owner = array("i", [-1]) * len(tg.vertices)  # vertex -> its copy, numbered across the forAlls
+    region: list[int] = []  # copy -> its forAll
+    for r, copies in enumerate(tg.stamped_copies):
+        for copy in copies:
+            owner[copy.start:copy.start + copy.size] = array("i", [len(region)]) * copy.size
+            region.append(r)
+            if copy.source != copy.start:
+                skip[copy.start:copy.start + copy.size] = b"\x01" * copy.size
+    decs = _Decompositions(tg)
+    operators = _operator_constraints(tg, decs, skip)
+    execution = Constraints()
+    _execution_constraints(tg, decs, execution, skip)
+    out = Constraints()
+    for part in (operators, execution):
+        runs = _runs(part, owner, region)
+        if runs is None:
+            return None
+        _stamp_runs(tg, part, runs, owner, region, out)
+    return out
+
+
+def _runs(part: Constraints, owner: array, region: list[int]) -> list[tuple[int, int, int]] | None:
+    """``part`` in runs of one copy each (lo, hi, copy; copy -1 outside the copies); None when a
+    constraint joins two copies or a copy and the outside, or a forAll's runs are not together
+    and in copy order."""
+    runs: list[tuple[int, int, int]] = []
+    for i, (_, first, second, _) in enumerate(part.rows()):
+        k = owner[first]
+        if owner[second] != k:
+            return None
+        if runs and runs[-1][2] == k:
+            runs[-1] = (runs[-1][0], i + 1, k)
+        else:
+            runs.append((i, i + 1, k))
+    closed: set[int] = set()  # forAlls whose run of copies is over
+    previous = (-1, -1)  # (forAll, copy) of the run before
+    for _, _, k in runs:
+        r = region[k] if k >= 0 else -1
+        if r >= 0 and (r in closed or (previous[0] == r and previous[1] >= k)):
+            return None  # a forAll's copies in more than one run, or out of order
+        if previous[0] >= 0 and previous[0] != r:
+            closed.add(previous[0])
+        previous = (r, k)
+    return runs
+
+
+def _stamp_runs(tg: TaskGraph, part: Constraints, runs: list[tuple[int, int, int]], owner: array,
+                region: list[int], out: Constraints) -> None:
+    """Append ``part`` to ``out``, each forAll's built copies' runs replaced by the runs of all its
+    copies, in order, each made from its source's."""
+    spans = {k: (lo, hi) for lo, hi, k in runs if k >= 0}
+    done: set[int] = set()
+    for lo, hi, k in runs:
+        if k < 0:
+            out.extend_shifted(part, lo, hi, 0)
+            continue
+        if region[k] in done:
+            continue
+        done.add(region[k])
+        for copy in tg.stamped_copies[region[k]]:
+            span = spans.get(owner[copy.source])
+            if span is not None:
+                out.extend_shifted(part, span[0], span[1], copy.start - copy.source)

@@ -47,6 +47,7 @@ from .model.task_graph import (
     EdgeKind,
     ExecutionPartner,
     ScopeVertex,
+    StampedCopy,
     TaskGraphBuilder,
     TaskVertex,
     Vertex,
@@ -308,6 +309,9 @@ class Stamper:
                 self._copy(placed[-1], tree_kind)
                 ustart += fragment.untrimmed[1] - fragment.untrimmed[0]
             self.placed.append(placed)
+            new.stamped_copies.append(tuple(
+                StampedCopy(p.start, placed[forall.representative[i]].start, p.fragment.trimmed[1] - p.fragment.trimmed[0])
+                for i, p in enumerate(placed)))
             shift = new.next_index - stop
             untrimmed_shift = ustart - region.untrimmed[1]
             self.untrimmed_shifts.append((region.untrimmed[1], untrimmed_shift))

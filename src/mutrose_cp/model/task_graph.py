@@ -136,6 +136,16 @@ class ExecutionPartner(NamedTuple):
     divisible: bool
 
 
+class StampedCopy(NamedTuple):
+    """A forAll copy's vertices ``start .. start + size - 1``, made from those of the copy at
+    ``source`` (itself for a copy that was built): vertex ``source + k`` and ``start + k``
+    stand for the same goal, task or decomposition of their copies."""
+
+    start: int
+    source: int
+    size: int
+
+
 class Edge(NamedTuple):
     source: int
     target: int
@@ -342,6 +352,9 @@ class TaskGraph(_Adjacency):
     # achieve goals that trimming removed (means-end goals, single-child chains above the root),
     # by the kept vertex that now stands for their subtree: their conditions are checked there
     achieve_carried: Mapping[int, tuple[ScopeVertex, ...]] = field(default_factory=dict)
+    # the forAll copies stamped from another (mutrose_cp.stamping), by forAll, in vertex order:
+    # later stages may stamp what they make of a copy from what they make of its source
+    stamped_copies: tuple[tuple[StampedCopy, ...], ...] = field(default=(), compare=False)
 
     @cached_property
     def decomposition_keys(self) -> dict[int, str]:
@@ -368,6 +381,7 @@ class TaskGraphBuilder(_Adjacency):
         self.vertices = []
         self._edges = _EdgeIndex()
         self.achieve_carried: dict[int, list[ScopeVertex]] = {}
+        self.stamped_copies: list[tuple[StampedCopy, ...]] = []
         self._partners: dict[tuple[int, bool, bool], ExecutionPartner] = {}
 
     @property
@@ -491,4 +505,5 @@ class TaskGraphBuilder(_Adjacency):
         if _decompositions_are_and_successors(self.vertices, edges):
             edges.decompositions = None
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
-                         achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()})
+                         achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()},
+                         stamped_copies=tuple(self.stamped_copies))
