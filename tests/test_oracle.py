@@ -85,3 +85,26 @@ def test_an_achieve_goal_inside_a_forall_is_checked_per_copy():
                          item_predicates=("tagged",), items=(m.Item("Item1"), m.Item("Item2")))
     assert m.load_mission(spec).decomposition_space().count == 1
     _listed_decompositions_validate(spec)
+
+
+def test_tasks_after_a_subtree_without_constraints_see_its_effects():
+    """Found by the oracle: the room runs [G4;G5;G8], G5 being a FALLBACK over the items whose
+    second branch drops (its condition is false and nothing makes it true).  G5's subtree is then
+    one task with no constraint, so, as in the original, no SEQ constraint joins it to G8's task
+    (semantics.md §6.1); G8's task still runs after it and sees the room it cleaned.  The
+    validator read the order from the constraints only."""
+    m = missiongen
+    task = m.Task("TaskA", (m.Method("mA0", (m.Lit("clean", "?rm", False),), ("act0",)),
+                            m.Method("mA1", (m.Lit("clean", "?rm"),), ("act1",))))
+    actions = (m.Action("act0", (), (m.Lit("clean", "?rm"),)), m.Action("act1", (), (m.Lit("clean", "?rm"),)))
+    items_goal = m.GoalNode((m.GoalNode((m.TaskNode("TaskA"),)),
+                             m.GoalNode((m.TaskNode("TaskA"),), condition="current_room.is_clean")),
+                            annotation=("flat", "FALLBACK"), forall="")
+    tree = m.GoalNode((m.QueryNode(), items_goal, m.GoalNode((m.TaskNode("TaskA"),))), annotation=("flat", ";"))
+    rooms = (m.Room("Room1", True, (("clean", False),), 0, items=("Item1",)),)
+    spec = m.MissionSpec(("clean",), (), actions, (task,), rooms, True, "", tree,
+                         item_predicates=("ready",), items=(m.Item("Item1", (("ready", True),)),))
+    mission = m.load_mission(spec)
+    assert not [c for c in mission.constraints if c.kind == "SEQ"], "the quirk this test is about is gone"
+    assert mission.decomposition_space().count == 1
+    _listed_decompositions_validate(spec)

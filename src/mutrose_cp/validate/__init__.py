@@ -436,14 +436,27 @@ class _Validator:
 
     # -- how two tasks are related by the runtime annotations -------------------------------------
     def _relation(self, a: OutputTask, b: OutputTask) -> str:
-        """The operator under which two tasks meet: ``;``, ``#``, ``FALLBACK`` or ``OR``.
+        """The operator under which two tasks meet: ``;``, ``#``, ``FALLBACK`` or ``OR``."""
+        return self._meeting(a, b)[0]
+
+    def _sequenced_before(self, a: OutputTask, b: OutputTask) -> bool:
+        """Whether ``a`` runs before ``b`` by a ``;`` of the goal model.  The constraints do not
+        always say so: a subtree whose constraint list is empty (a one-child operator above a
+        single task) gets no constraint with its siblings (semantics.md §6.1), and yet the
+        tasks after it see its effects."""
+        op, pos_a, pos_b = self._meeting(a, b)
+        return op == ";" and pos_a < pos_b
+
+    def _meeting(self, a: OutputTask, b: OutputTask) -> tuple[str, int, int]:
+        """The operator under which two tasks meet (``;``, ``#``, ``FALLBACK`` or ``OR``), and the
+        positions in its goal's annotation of the children that lead to them (-1, -1 where none).
 
         Read from the goal model alone: the lowest goal above both, and in its annotation the
         lowest operator over the two children that lead to them (annotation entries pair with
         children by position, as in the original).  Instances of different forAll elements
         meet under the forAll's parallel node."""
         if a.gm_task not in self.gm_task_path or b.gm_task not in self.gm_task_path:
-            return "#"
+            return "#", -1, -1
         up_a = [self.gm.node(a.gm_task)] + self.gm_task_path[a.gm_task]
         up_b = [self.gm.node(b.gm_task)] + self.gm_task_path[b.gm_task]
         keys_b = [n.key for n in up_b]
@@ -455,16 +468,16 @@ class _Validator:
         elements_a = a.instance.split("_")[1:1 + common]
         elements_b = b.instance.split("_")[1:1 + common]
         if elements_a != elements_b:
-            return "#"  # different elements of a forAll above both
+            return "#", -1, -1  # different elements of a forAll above both
         if depth_a == 0 or keys_b.index(meet.key) == 0:
-            return "#"
+            return "#", -1, -1
         if meet.or_decomposed:
-            return "OR"
+            return "OR", -1, -1
         child_a, child_b = up_a[depth_a - 1].key, up_b[keys_b.index(meet.key) - 1].key
         if meet.annotation is None:
-            return "#"
+            return "#", -1, -1
         pos_a, pos_b = meet.children.index(child_a), meet.children.index(child_b)
-        return _lowest_operator(meet.annotation, pos_a, pos_b) or "#"
+        return _lowest_operator(meet.annotation, pos_a, pos_b) or "#", pos_a, pos_b
 
     # -- ordering ----------------------------------------------------------------------------------
     def _ordering(self, i: int, keys: list[str], errors: list[Violation]) -> None:
@@ -475,14 +488,21 @@ class _Validator:
                                            + " -> ".join(self.out.tasks[a].id for a, _ in cycle)))
 
     def _predecessors(self, key: str, chosen: set[str]) -> list[str]:
-        """Chosen tasks that the SEQ and FB constraints put before ``key``, in execution order,
-        without the alternatives a fallback replaces (they failed when ``key`` runs)."""
+        """Chosen tasks that the SEQ and FB constraints, or the goal model's ``;``, put before
+        ``key``, in execution order, without the alternatives a fallback replaces (they failed
+        when ``key`` runs)."""
         task = self.out.tasks[key]
-        if key not in self._before:
-            self._before[key] = nx.ancestors(self.seq_fb, key)
-        before = self._before[key] & chosen
+        before = self._ancestors_by_constraints(key) & chosen
+        for p in chosen - before - {key}:
+            if self._sequenced_before(self.out.tasks[p], task):
+                before |= {p} | (self._ancestors_by_constraints(p) & chosen)
         return sorted((p for p in before if self._relation(self.out.tasks[p], task) != "FALLBACK"),
                       key=self.rank.__getitem__)
+
+    def _ancestors_by_constraints(self, key: str) -> set[str]:
+        if key not in self._before:
+            self._before[key] = nx.ancestors(self.seq_fb, key)
+        return self._before[key]
 
     def _state_before(self, keys: list[str], chosen: set[str]) -> State:
         """The initial state changed by every chosen predecessor of ``keys`` (and not by them)."""
