@@ -61,14 +61,15 @@ class ForallCopies:
     """The copies of one forAll node: which are built, and which built copy each one is
     stamped from."""
 
-    node: RatNode  # the forAll's parallel node
-    copies: list[RatNode]
+    copies: list[RatNode]  # the children of the forAll's parallel node
     preorder: list[list[RatNode]]  # each copy's annotation nodes, depth first
     representative: list[int]  # copy -> the built copy of its shape (itself when built)
 
 
 @dataclass
 class StampingPlan:
+    """The forAll nodes whose copies are stamped (none inside another)."""
+
     foralls: list[ForallCopies]
 
     @property
@@ -116,7 +117,7 @@ def _forall_copies(node: RatNode, instances: Mapping[str, TaskInstance], gm: Goa
         return None
     if all(r == i for i, r in enumerate(representative)):
         return None  # every copy has a shape of its own
-    return ForallCopies(node, list(node.children), preorder, representative)
+    return ForallCopies(list(node.children), preorder, representative)
 
 
 def _has_condition(gm: GoalModel, goal: str) -> bool:
