@@ -244,3 +244,38 @@ def test_a_scope_carried_from_copy_to_copy_rules_stamping_out() -> None:
     assert partners["AT2_1"] == 0 and partners["AT2_2"] > 0 and partners["AT2_5"] == partners["AT2_2"]
     assert plan_stamping(m.expansion.rat, {i.id: i for i in m.expansion.instances}, m.goal_model, m.paths) is not None
     assert not _agree(m)
+
+
+def test_foralls_stamped_inside_the_copies_of_another(tmp_path: Path) -> None:
+    """Three rooms of five patients, a condition (true) on a goal of each room, and no
+    Group=False over the rooms (which would join a room's patients by execution constraints):
+    the rooms are not stamped, but the patients of each room are, one forAll after the other
+    (in the Task Graph; their constraints are not, see below)."""
+    hddl, gm, cfg = generate("vital-signs", 3, tmp_path)
+    text = gm.read_text(encoding="utf-8").replace(',\n            "Group": "False"', "")
+    for goal, extra in (("G6: Enter the Room", '"CreationCondition": "assertion condition \\"current_room.is_occupied\\""'),
+                        ("G9: Approach The Patient",  # a means-end achieve goal: trimming carries it
+                         '"GoalType": "Achieve", "AchieveCondition": "current_patient.available"')):
+        head, sep, rest = text.partition(f'"text": "{goal}"')
+        text = head + sep + rest.replace('"customProperties": {', '"customProperties": {' + extra + ",", 1)
+    gm = tmp_path / "gm.txt"  # (the goal model generate names is the corpus's own)
+    gm.write_text(text, encoding="utf-8")
+    parts = ["<world_db>"]
+    for room in range(3):
+        names = ",".join(f"Patient{5 * room + k}" for k in range(1, 6))
+        parts.append(f"<Room><name>Room{room}</name><is_occupied>true</is_occupied><patients>{names}</patients></Room>")
+    parts.append("<Room><name>SanitizationRoom</name><is_occupied>false</is_occupied><patients></patients></Room>")
+    for p in range(1, 16):
+        parts.append(f"<Patient><name>Patient{p}</name><infectious_disease>{str(p % 3 == 0).lower()}</infectious_disease>"
+                     f"<diabetes>{str(p % 3 == 1).lower()}</diabetes><post_surgical>{str(p % 3 == 2).lower()}"
+                     "</post_surgical><available>true</available><checked>false</checked></Patient>")
+    (tmp_path / "vital-signs-3.xml").write_text("\n".join(parts + ["</world_db>"]) + "\n", encoding="utf-8")
+    m = Mission.load(hddl, gm, cfg)
+    plan = plan_stamping(m.expansion.rat, {i.id: i for i in m.expansion.instances}, m.goal_model, m.paths)
+    assert plan is not None and [len(f.copies) for f in plan.foralls] == [5, 5, 5]
+    assert _agree(m)
+    assert len(m.task_graph.stamped_copies) == 3
+    assert len(m.task_graph.achieve_carried) == 15
+    # each room enters before its patients (G4 is [G5;G6;G7;G16]): those constraints leave the
+    # patients' copies, so the constraints are generated in full
+    assert _stamped(m.task_graph) is None
