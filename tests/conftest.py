@@ -1,9 +1,11 @@
 """Shared fixtures: the reference corpus (third-party missions with the original's outputs)."""
 from __future__ import annotations
 
+import hashlib
 import os
 import tempfile
 from pathlib import Path
+from typing import Iterator
 
 import pytest
 
@@ -23,6 +25,23 @@ def require_reference() -> Path:
             pytest.fail(f"reference corpus not found at {REFERENCE} (set MUTROSE_REFERENCE)")
         pytest.skip(f"reference corpus not found at {REFERENCE}")
     return REFERENCE
+
+
+def _digests(*roots: Path) -> dict[Path, str]:
+    return {path: hashlib.sha256(path.read_bytes()).hexdigest()
+            for root in roots if root.is_dir() for path in sorted(root.rglob("*")) if path.is_file()}
+
+
+@pytest.fixture(scope="session", autouse=True)
+def inputs_left_alone() -> Iterator[None]:
+    """No test changes the reference corpus or the bundled examples and models: a test that
+    edits a mission works on a copy (the corpus files are read-only, which does not stop root)."""
+    roots = (REFERENCE, ROOT / "examples", ROOT / "models")
+    before = _digests(*roots)
+    yield
+    after = _digests(*roots)
+    changed = sorted(str(p) for p in before.keys() | after.keys() if before.get(p) != after.get(p))
+    assert not changed, f"tests changed their inputs: {changed[:5]}"
 
 
 @pytest.fixture
