@@ -288,7 +288,7 @@ class _Validator:
         self._replays: dict[str, tuple[TaskEffects, list[str]] | None] = {}
         self._noted: set[str] = set()
         self._before: dict[str, set[str]] = {}  # per task, what the constraints put before it
-        self._places_of: tuple[frozenset[str], dict[tuple[str, tuple[str, ...], int], list[str]]] = (frozenset(), {})
+        self._places_of: tuple[set[str] | None, dict[tuple[str, tuple[str, ...], int], list[str]]] = (None, {})
         self._after: dict[str, set[str]] = {}
 
     def _execution_rank(self) -> dict[str, tuple[int, int]]:
@@ -513,14 +513,13 @@ class _Validator:
 
     def _goal_places(self, chosen: set[str]) -> dict[tuple[str, tuple[str, ...], int], list[str]]:
         """The chosen tasks by (goal above them, its copy, the goal's child leading to them), made
-        once per decomposition."""
-        key = frozenset(chosen)
-        if self._places_of[0] != key:
+        once per decomposition (``chosen`` is one set object per decomposition, never changed)."""
+        if self._places_of[0] is not chosen:
             places: dict[tuple[str, tuple[str, ...], int], list[str]] = {}
             for k in chosen:
                 for place in self._places(self.out.tasks[k]):
                     places.setdefault(place, []).append(k)
-            self._places_of = (key, places)
+            self._places_of = (chosen, places)
         return self._places_of[1]
 
     def _places(self, task: OutputTask) -> list[tuple[str, tuple[str, ...], int]]:
