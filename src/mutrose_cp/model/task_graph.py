@@ -12,7 +12,6 @@ import dataclasses
 import itertools
 from dataclasses import dataclass, field
 from functools import cached_property
-from operator import attrgetter
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, Iterator, Mapping, NamedTuple, Self, Sequence, overload
 
@@ -48,8 +47,26 @@ class Decomposition:
     predicates: GroundPredicates
 
 
-# per vertex class: its field names and a getter of their values (see _Vertex.moved)
-_FIELDS: dict[type, tuple[tuple[str, ...], Callable[[Any], tuple[Any, ...]]]] = {}
+# per vertex class and fields given anew: a function copying a vertex (see _copier)
+_COPIERS: dict[tuple[type, tuple[str, ...]], Callable[..., Any]] = {}
+
+
+def _copier(cls: type, given: tuple[str, ...]) -> Callable[..., Any]:
+    """A function ``(vertex, index, parent, *given values)`` that copies a ``cls`` vertex with
+    those fields set, slot by slot.  Trimming and stamping copy hundreds of thousands of
+    vertices: ``dataclasses.replace`` re-runs the frozen ``__init__``, and a loop over the
+    fields took three times as long as this straight-line function, generated once per class
+    and set of fields (as ``dataclasses`` generates ``__init__``)."""
+    copier = _COPIERS.get((cls, given))
+    if copier is None:
+        names = [f.name for f in dataclasses.fields(cls)]
+        params = ("index", "parent", *given)
+        assert set(params) <= set(names), (cls, given)
+        body = "".join(f"    set_(new, {n!r}, {n if n in params else 'vertex.' + n})\n" for n in names)
+        namespace: dict[str, Any] = {"new_": object.__new__, "set_": object.__setattr__, "cls": cls}
+        exec(f"def copy(vertex, {', '.join(params)}):\n    new = new_(cls)\n{body}    return new\n", namespace)
+        copier = _COPIERS[(cls, given)] = namespace["copy"]
+    return copier
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
@@ -61,28 +78,15 @@ class _Vertex:
     divisible: bool = True
 
     def moved(self, index: int, parent: int) -> Self:
-        """The same vertex at another position: trimming renumbers the graph.  (A direct copy of
-        the slots: ``dataclasses.replace`` re-runs ``__init__``, which costs more on large
-        missions.)"""
-        cls = type(self)
-        fields = _FIELDS.get(cls)
-        if fields is None:
-            names = tuple(f.name for f in dataclasses.fields(cls))
-            fields = _FIELDS[cls] = (names, attrgetter(*names))
-        new = object.__new__(cls)
-        for name, value in zip(fields[0], fields[1](self)):
-            object.__setattr__(new, name, value)
-        object.__setattr__(new, "index", index)
-        object.__setattr__(new, "parent", parent)
-        return new
+        """The same vertex at another position: trimming renumbers the graph."""
+        copied: Self = _copier(type(self), ())(self, index, parent)
+        return copied
 
     def stamped(self, index: int, parent: int, **content: Any) -> Self:
         """The same vertex at another position with other content: a vertex of a forAll copy
         made from the same vertex of an identical copy (:mod:`mutrose_cp.stamping`)."""
-        new = self.moved(index, parent)
-        for name, value in content.items():
-            object.__setattr__(new, name, value)
-        return new
+        copied: Self = _copier(type(self), tuple(content))(self, index, parent, *content.values())
+        return copied
 
 
 @dataclass(frozen=True, kw_only=True, slots=True)
