@@ -27,7 +27,7 @@ from .model.task_graph import (
     TaskGraphBuilder,
     TaskVertex,
 )
-from .stamping import Stamper, plan_stamping
+from .stamping import Stamper, StampingPlan, plan_stamping
 
 AND, OR, CD, EC = EdgeKind.AND, EdgeKind.OR, EdgeKind.CD, EdgeKind.EC
 
@@ -409,11 +409,14 @@ def build_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, state
     """Build, connect and trim the Task Graph of an expanded mission.  With ``stamp``, forAll
     copies identical up to renaming are built once and stamped where that gives the same graph
     (:func:`stamped_task_graph`)."""
-    if stamp:
-        stamped = stamped_task_graph(exp, gm, config, state, paths)
+    builder = _Builder(exp, gm, config, state, paths)
+    plan = plan_stamping(exp.rat, builder.instances, gm, paths) if stamp else None
+    if plan is not None:
+        stamped = _stamped(builder, plan)
         if stamped is not None:
             return stamped
-    graph, trimmer = _connected(_Builder(exp, gm, config, state, paths))
+        builder = _Builder(exp, gm, config, state, paths)  # the reduced build used the first
+    graph, trimmer = _connected(builder)
     return graph.freeze(unique_branch=trimmer is None)
 
 
@@ -424,8 +427,11 @@ def stamped_task_graph(exp: Expansion, gm: GoalModel, config: Configuration, sta
     it or a rule of stamping fails on the reduced graph."""
     builder = _Builder(exp, gm, config, state, paths)
     plan = plan_stamping(exp.rat, builder.instances, gm, paths)
-    if plan is None:
-        return None
+    return None if plan is None else _stamped(builder, plan)
+
+
+def _stamped(builder: _Builder, plan: StampingPlan) -> TaskGraph | None:
+    """The graph ``builder`` builds without the copies ``plan`` leaves out, those stamped in."""
     builder.skip = plan.skipped
     reduced, trimmer = _connected(builder)
     if trimmer is None or builder.searched:

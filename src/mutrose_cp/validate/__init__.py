@@ -289,6 +289,8 @@ class _Validator:
         self._noted: set[str] = set()
         self._before: dict[str, set[str]] = {}  # per task, what the constraints put before it
         self._places_of: tuple[set[str] | None, dict[tuple[str, tuple[str, ...], int], list[str]]] = (None, {})
+        self._levels_of: dict[str, list[tuple[str, int, int]]] = {}
+        self._forall_depths: dict[str, int] = {}
         self._after: dict[str, set[str]] = {}
 
     def _execution_rank(self) -> dict[str, tuple[int, int]]:
@@ -465,7 +467,7 @@ class _Validator:
         meet = up_a[depth_a]
         # an instance number has one component per enclosing forAll, outermost first: the
         # forAlls at or above the meeting goal are the first components of both numbers
-        common = sum(1 for n in up_a[depth_a:] if n.forall is not None)
+        common = self._forall_depth(meet)
         elements_a = a.instance.split("_")[1:1 + common]
         elements_b = b.instance.split("_")[1:1 + common]
         if elements_a != elements_b:
@@ -525,18 +527,28 @@ class _Validator:
     def _places(self, task: OutputTask) -> list[tuple[str, tuple[str, ...], int]]:
         """(goal, copy, child position) for every goal above ``task``; the copy of a goal is
         the task's first instance numbers, one per forAll at or above the goal."""
-        path = self.gm_task_path.get(task.gm_task)
-        if path is None:
-            return []
         elements = task.instance.split("_")[1:]
-        below = self.gm.node(task.gm_task)
-        out = []
-        for goal in path:
-            copies = sum(1 for n in [goal, *self._ancestors(goal)] if n.forall is not None)
-            if below.key in goal.children:
-                out.append((goal.key, tuple(elements[:copies]), goal.children.index(below.key)))
-            below = goal
-        return out
+        return [(goal, tuple(elements[:copies]), position) for goal, copies, position in self._levels(task.gm_task)]
+
+    def _levels(self, gm_task: str) -> list[tuple[str, int, int]]:
+        """(goal, forAlls at or above it, position of the child leading down) for every goal
+        above a goal-model task, once per task."""
+        levels = self._levels_of.get(gm_task)
+        if levels is None:
+            levels = self._levels_of[gm_task] = []
+            path = self.gm_task_path.get(gm_task, [])
+            for below, goal in zip([self.gm.node(gm_task), *path] if path else [], path):
+                if below.key in goal.children:
+                    levels.append((goal.key, self._forall_depth(goal), goal.children.index(below.key)))
+        return levels
+
+    def _forall_depth(self, goal: GMNode) -> int:
+        """The forAll goals at or above ``goal``: how many leading numbers of an instance id
+        tell the copies of ``goal`` apart."""
+        depth = self._forall_depths.get(goal.key)
+        if depth is None:
+            depth = self._forall_depths[goal.key] = sum(1 for n in [goal, *self._ancestors(goal)] if n.forall is not None)
+        return depth
 
     def _ancestors_by_constraints(self, key: str) -> set[str]:
         if key not in self._before:
@@ -671,7 +683,7 @@ class _Validator:
         elements above it: the leading numbers of its tasks' instance ids) and binding of the
         condition's variables."""
         names = _variables(cond) | ({group_by} if group_by else set())
-        depth = sum(1 for n in self._ancestors(goal) if n.forall is not None)
+        depth = self._forall_depth(goal) - (goal.forall is not None)  # the forAlls above it
         groups: dict[tuple[tuple[str, ...], _BindingKey], list[OutputTask]] = {}
         unbound: list[OutputTask] = []
         # instance number -> the group of its tasks that bind the names
