@@ -1391,3 +1391,18 @@ def or_choices_mission(rooms: int = 8, alternatives: int = 3) -> MissionSpec:
     tree = GoalNode((choice,))
     room_list = tuple(Room(f"Room{i + 1}", True, (("clean", False),), 0) for i in range(rooms))
     return MissionSpec(("clean",), ("charged",), actions, tasks, room_list, True, "current_room.is_clean", tree)
+
+
+@st.composite
+def repeated_rooms(draw) -> MissionSpec:
+    """A random mission whose rooms are repeated under new names (identical copies), with one
+    more room of its own now and then (a copy of another shape)."""
+    spec = draw(missions())
+    rooms = list(spec.rooms)
+    for k in range(draw(st.integers(2, 5))):
+        room = draw(st.sampled_from(spec.rooms))
+        rooms.append(dataclasses.replace(room, name=f"Room{len(rooms) + 1}"))
+    if draw(st.booleans()):
+        facts = tuple((p, draw(st.sampled_from([None, True, False]))) for p, _ in spec.rooms[0].facts)
+        rooms.append(dataclasses.replace(spec.rooms[0], name=f"Room{len(rooms) + 1}", facts=facts, active=True))
+    return dataclasses.replace(spec, rooms=tuple(rooms))

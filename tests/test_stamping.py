@@ -4,8 +4,8 @@
 exactly the graph ``build_task_graph(..., stamp=False)`` gives (vertices with their content,
 edges and partner lists in order, carried achieve goals), or None where its rules rule it out.
 
-* random missions from ``missiongen`` with their rooms repeated (so that forAll goals have
-  three copies or more, most of them identical up to renaming) and some rooms of their own;
+* random missions from ``missiongen.repeated_rooms`` (rooms repeated, so that forAll goals have
+  three copies or more, most of them identical up to renaming, and some rooms of their own);
   a seeded run checks that stamping is really used on a fair share of them;
 * every configuration of the reference corpus, and the vital-signs, delivery and pickup
   benchmark worlds (where stamping must be used);
@@ -14,7 +14,6 @@ edges and partner lists in order, carried achieve goals), or None where its rule
 """
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 import sys
@@ -22,7 +21,6 @@ from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, event, given, seed, settings
-from hypothesis import strategies as st
 
 from mutrose_cp.constraints import _stamped, generate_constraints
 from mutrose_cp.mission import Mission, find_mission_files
@@ -31,7 +29,7 @@ from mutrose_cp.stamping import plan_stamping
 from mutrose_cp.taskgraph import build_task_graph, stamped_task_graph
 
 from conftest import ROOT, require_reference
-from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission, missions
+from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission, repeated_rooms
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from generate import generate  # noqa: E402
@@ -68,23 +66,8 @@ def _agree(m: Mission) -> bool:
     return stamped is not None
 
 
-@st.composite
-def _repeated_rooms(draw) -> MissionSpec:
-    """A random mission whose rooms are repeated under new names (identical copies), with one
-    more room of its own now and then (a copy of another shape)."""
-    spec = draw(missions())
-    rooms = list(spec.rooms)
-    for k in range(draw(st.integers(2, 5))):
-        room = draw(st.sampled_from(spec.rooms))
-        rooms.append(dataclasses.replace(room, name=f"Room{len(rooms) + 1}"))
-    if draw(st.booleans()):
-        facts = tuple((p, draw(st.sampled_from([None, True, False]))) for p, _ in spec.rooms[0].facts)
-        rooms.append(dataclasses.replace(spec.rooms[0], name=f"Room{len(rooms) + 1}", facts=facts, active=True))
-    return dataclasses.replace(spec, rooms=tuple(rooms))
-
-
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck))
-@given(_repeated_rooms())
+@given(repeated_rooms())
 def test_stamped_graph_is_the_full_construction_on_random_missions(spec: MissionSpec) -> None:
     try:
         m = load_mission(spec)
@@ -101,7 +84,7 @@ def test_stamping_is_used_on_random_missions() -> None:
 
     @seed(20261201)
     @settings(max_examples=40, deadline=None, database=None, suppress_health_check=list(HealthCheck))
-    @given(_repeated_rooms())
+    @given(repeated_rooms())
     def draw(spec: MissionSpec) -> None:
         try:
             m = load_mission(spec)

@@ -135,13 +135,16 @@ class EntryTemplates:
         return _member("robots_num", boost_json(robots_tree(rn), 12))
 
     # -- the printed predicates, per template --------------------------------------------------
-    def _sorts(self, value: str) -> tuple[str, ...]:
+    def sorts_of(self, value: str) -> tuple[str, ...]:
         known = self._sort_of.get(value)
         if known is None:
             known = self._sort_of[value] = tuple(s for s, members in self.sorts.items() if value in members)
         return known
 
-    def _predicates_text(self, dec: Decomposition, constants: frozenset[str], path_key: int) -> str:
+    def _predicate_slots(self, dec: Decomposition, constants: frozenset[str],
+                         path_key: int) -> tuple[Hashable, list[str], dict[str, Value]]:
+        """The template key of ``dec``'s predicates, the values in its slots (in slot order) and
+        the binding with a placeholder for each of them."""
         values: list[str] = []
         slot: dict[str, int] = {}
         symbolic: dict[str, Value] = {}
@@ -155,7 +158,7 @@ class EntryTemplates:
             if k is None:
                 k = slot[v] = len(values)
                 values.append(v)
-                shape.append(self._sorts(v))
+                shape.append(self.sorts_of(v))
             shape.append(k)
             return f"{_SLOT_MARK}{k}{_SLOT_MARK}"
 
@@ -166,7 +169,10 @@ class EntryTemplates:
                 symbolic[param] = tuple(placeholder(v) for v in value)
             else:
                 symbolic[param] = placeholder(value)
-        key = (dec.instance.name, path_key, tuple(shape))
+        return (dec.instance.name, path_key, tuple(shape)), values, symbolic
+
+    def _predicates_text(self, dec: Decomposition, constants: frozenset[str], path_key: int) -> str:
+        key, values, symbolic = self._predicate_slots(dec, constants, path_key)
         escaped = [_escape(v)[1:-1] for v in values]
         if key in self._predicates:
             template = self._predicates[key]
@@ -193,13 +199,50 @@ class EntryTemplates:
         values = argument_values(self.domain.task_by_name[inst.name], inst)
         loc = inst.location
         decomposition, constants, path_key = self._path(dec.path)
+        return self._members(dec, group, divisible, _escape(dec.id), boost_json(values, 12),
+                             boost_json(list(loc) if isinstance(loc, tuple) else (loc or ""), 12),
+                             self._predicates_text(dec, constants, path_key), decomposition)
+
+    def slotted_entry(self, dec: Decomposition, group: bool, divisible: bool,
+                      slot: Callable[[str, str], int]) -> str | None:
+        """The task entry of ``dec`` with a slot (``_SLOT`` in the text) for its id and for each
+        value, numbered by ``slot(kind, name)`` (kind "id" or "value"); None when its printed
+        predicates have no template.  An empty value stays empty, as a path's constants and "?"
+        values stay themselves in the printed predicates (``copy_blocks`` checks them)."""
+        inst = dec.instance
+        decomposition, constants, path_key = self._path(dec.path)
+        key, values, _ = self._predicate_slots(dec, constants, path_key)
+        if key not in self._predicates:
+            self._predicates_text(dec, constants, path_key)  # makes the template and checks it
+        template = self._predicates[key]
+        if template is None:
+            return None
+
+        def mark(v: str) -> str:
+            return f"{_SLOT_MARK}{slot('value', v)}{_SLOT_MARK}" if v else ""
+
+        arguments: dict[str, str] = {p.name: "" for p in self.domain.task_by_name[inst.name].parameters}
+        for pv in inst.parameters:
+            if pv.hddl_param in arguments:
+                value = pv.value
+                arguments[pv.hddl_param] = ("[" + ",".join(mark(v) for v in value) + "]" if isinstance(value, tuple)
+                                            else mark(value))
+        loc = inst.location
+        locations = [mark(v) for v in loc] if isinstance(loc, tuple) else mark(loc or "")
+        predicates = template.fill([_slot_text(slot("value", v)) for v in values])
+        return self._members(dec, group, divisible, f'"{_slot_text(slot("id", dec.id))}"', boost_json(arguments, 12),
+                             boost_json(locations, 12), predicates, decomposition)
+
+    def _members(self, dec: Decomposition, group: bool, divisible: bool, id_text: str, values: str, locations: str,
+                 predicates: str, decomposition: str) -> str:
+        inst = dec.instance
         members = (
-            _member("id", _escape(dec.id)),
+            _member("id", id_text),
             self._head(inst.name),
-            _member("arguments_values", boost_json(values, 12)),
-            _member("locations", boost_json(list(loc) if isinstance(loc, tuple) else (loc or ""), 12)),
+            _member("arguments_values", values),
+            _member("locations", locations),
             self._cached(("robots", inst.robot_number), lambda: self._robots(inst.robot_number)),
-            self._predicates_text(dec, constants, path_key),
+            predicates,
             self._cached(("events", inst.triggering_events), lambda: _member(
                 "triggering_events", boost_json(list(inst.triggering_events), 12))),
             decomposition,
@@ -207,3 +250,12 @@ class EntryTemplates:
                          + _member("divisible", f'"{divisible}"')),
         )
         return "{\n" + ",\n".join(members) + "\n        }"
+
+    def constants(self, path: DecompositionPath) -> frozenset[str]:
+        """The constants ``path``'s steps name: printed as themselves, never slotted."""
+        return self._path(path)[1]
+
+
+def _slot_text(k: int) -> str:
+    """Slot ``k`` as it stands in formatted (escaped) text."""
+    return f"\\u001F{k}\\u001F"

@@ -13,6 +13,7 @@ from typing import IO, TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
 
 from .boost_json import Tree, _write_list, boost_json, write_boost_json
 from .constraints import EC, SEQ, Constraint, constraint_of_row, constraint_rows
+from .copy_blocks import CopyBlocks
 from .entry_templates import EntryTemplates, actions_tree, argument_values, pred_tree, robots_tree
 from .errors import MissionError
 from .model import Configuration, Domain, InitialState, Literal, SemanticMapping
@@ -190,10 +191,19 @@ class OutputBuilder:
         if self.decs:
             fh.write("{\n")
             last = len(self.decs) - 1
-            templates = EntryTemplates(self.m.domain, self.printer, self.m.state.sorts)
-            for i, d in enumerate(self.decs):
+            templates = EntryTemplates(self.m.domain, self.printer, self.printer.sorts)
+            blocks = CopyBlocks(self.m.tg, self.decs, self.key, templates)
+            i = 0
+            while i <= last:
+                filled = blocks.entries(i)
+                if filled is not None:  # a stamped copy's entries, filled in its source's
+                    text, i = filled
+                    fh.write(text + (",\n" if i <= last else "\n"))
+                    continue
+                d = self.decs[i]
                 entry = templates.entry(d.decomposition, d.group, d.divisible)
                 fh.write(f'        "{self.key[d.index]}": {entry}' + (",\n" if i < last else "\n"))
+                i += 1
             fh.write("    }")
         else:
             fh.write('""')
