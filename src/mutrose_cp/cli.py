@@ -274,7 +274,8 @@ def _note(request: DecompositionRequest, result: DecompositionResult) -> str:
 
 
 def cmd_decompose(args: argparse.Namespace) -> int:
-    from .output import OutputModel, write_output
+    from .output import OutputModel
+    from .output_ahead import output_while_solving
 
     hddl, gm, cfg, folder = _inputs(args)
     start = time.perf_counter()
@@ -307,18 +308,13 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     if not tg.tasks() and not args.quiet:
         print("warning: the mission has no task instances (no entity of the world matched its queries): "
               "nothing to decompose", file=sys.stderr)
-    with phase("solving"):
-        result = mission.decompose(request, progress)
-    decompositions, total = result.decompositions, result.total
-    key = tg.decomposition_keys
-    section = result.space_section(key.__getitem__)
-    note = _note(request, result)
-    model = OutputModel(tg, constraints, decompositions, mission.domain, mission.config, mission.initial_state,
-                        space=section)
+    model = OutputModel(tg, constraints, [], mission.domain, mission.config, mission.initial_state)
     if args.ihtn:
+        with phase("solving"):
+            result = mission.decompose(request, progress)
         from .ihtn import refuse_oversized_export, write_ihtns
 
-        model.decompositions = list(decompositions)
+        model.decompositions = list(result.decompositions)
         one = args.ihtn_orderings == "one"
         with phase("counting iHTN files"):
             files = refuse_oversized_export(model, one, args.ihtn_max, str(args.ihtn))
@@ -328,8 +324,13 @@ def cmd_decompose(args: argparse.Namespace) -> int:
                                   one_per_decomposition=one)
     else:
         n_files = 0
-        with phase("writing the output"):
-            write_output(model, out_path, file_type, args.json_style)
+        # the task entries and constraints may be written by a second process while solving
+        with output_while_solving(model, out_path, file_type, args.json_style) as finish:
+            with phase("solving"):
+                result = mission.decompose(request, progress)
+            with phase("writing the output"):
+                finish(result.decompositions, result.space_section(tg.decomposition_keys.__getitem__))
+    total, note = result.total, _note(request, result)
     elapsed = time.perf_counter() - start
     kinds = constraints.count_by_kind()
     data = {

@@ -185,6 +185,11 @@ class OutputBuilder:
 
     def write_json(self, fh: IO[str]) -> None:
         """Stream the JSON document (mission decompositions may be many)."""
+        self.write_json_head(fh)
+        self.write_json_tail(fh)
+
+    def write_json_head(self, fh: IO[str]) -> None:
+        """The document up to its constraints: what the Task Graph alone decides."""
         fh.write("{\n    \"actions\": ")
         write_boost_json([{"name": n, "capabilities": caps[-1] if caps else ""} for n, caps in self.actions()], fh, 4)
         fh.write(",\n    \"tasks\": ")
@@ -209,6 +214,9 @@ class OutputBuilder:
             fh.write('""')
         fh.write(",\n    \"constraints\": ")
         _write_list(fh, self._constraint_texts(), 4)
+
+    def write_json_tail(self, fh: IO[str]) -> None:
+        """The rest of the document: the mission decompositions and the decomposition space."""
         fh.write(",\n    \"mission_decompositions\": ")
         first = True
         quoted = {i: f'            "{k}"' for i, k in self.key.items()}  # keys need no escaping
