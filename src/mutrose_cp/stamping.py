@@ -35,7 +35,7 @@ single-child vertices cannot pass through the forAll's node, which has two child
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Hashable, Iterator, Mapping, Sequence, TypeVar
+from typing import Callable, Hashable, Iterator, Mapping, NamedTuple, Sequence, TypeVar
 
 from .annotation_tree import TASK, RatNode
 from .expansion import TaskInstance, Value
@@ -43,7 +43,6 @@ from .htn import DecompositionPath, ground_path
 from .model import GoalModel
 from .model.task_graph import (
     Decomposition,
-    DecompositionVertex,
     EdgeKind,
     ExecutionPartner,
     ScopeVertex,
@@ -51,6 +50,7 @@ from .model.task_graph import (
     TaskGraphBuilder,
     TaskVertex,
     Vertex,
+    vertex_copier,
 )
 
 MIN_COPIES = 4  # the first two and the last are built: something is left to stamp
@@ -160,6 +160,8 @@ class _Fragment:
     number: int = 0  # its place among all fragments, in vertex order
     region: int = 0  # its forAll's place among the stamped ones, in vertex order
     positions: dict[int, int] | None = None  # annotation node id -> place in ``nodes`` (made on first use)
+    recipe: "_Recipe | None" = None  # how its stamped copies make their vertices (made on first use)
+    partners: tuple[list[ExecutionPartner], dict[int, list[int]]] | None = None  # see Stamper._partner_records
 
 
 @dataclass
@@ -188,7 +190,7 @@ class _Placed:
     start: int  # its first vertex in the full trimmed graph
     untrimmed_start: int  # and in the full untrimmed graph
     content: "_Content | None"  # None: a built copy, which keeps its content
-    partners: dict[int, ExecutionPartner] | None = None  # see Stamper._partner_records
+    partners: list[ExecutionPartner] | None = None  # see Stamper._partner_records
 
     def trimmed(self, v: int) -> int:
         return self.start + v - self.fragment.trimmed[0]
@@ -243,8 +245,8 @@ class Stamper:
             if placed is None:
                 new.set_partners(key, [new.partner(self.position[p.task], p.group, p.divisible) for p in partners])
             else:
-                made = self._partner_records(placed)
-                new.set_partners(key, [made[id(p)] for p in partners])
+                records, places = self._partner_records(placed)
+                new.set_partners(key, list(map(records.__getitem__, places[id(partners)])))
         for key, carried, placed in self._in_full_order(list(self.reduced.achieve_carried.items())):
             new.achieve_carried[key] = [self._carried(c, placed) for c in carried]
         return new
@@ -336,20 +338,38 @@ class Stamper:
 
     def _copy(self, placed: _Placed, tree_kind: list[EdgeKind]) -> None:
         """One copy: its representative's kept vertices, with its own content."""
-        new, reduced, origins, content = self.new, self.reduced, self.origins, placed.content
+        new, reduced, content = self.new, self.reduced, placed.content
         lo, hi = placed.fragment.trimmed
         base = placed.start
-        originals = placed.fragment.originals
+        if content is not None:
+            content.make(self._recipe(placed.fragment, tree_kind), base, new)
+            return
         for u in range(lo, hi):
             vertex = reduced.vertices[u]
             p = vertex.parent
-            parent = base + p - lo if p >= lo else self.position[p]
-            index = base + u - lo
-            if content is None:
-                made: Vertex = vertex.moved(index, parent)
-            else:
-                made = content.vertex(vertex, origins[originals[u - lo]], index, parent)
-            new.add_child(made, tree_kind[u])
+            new.add_child(vertex.moved(base + u - lo, base + p - lo if p >= lo else self.position[p]), tree_kind[u])
+
+    def _recipe(self, fragment: _Fragment, tree_kind: list[EdgeKind]) -> _Recipe:
+        """How a copy makes its vertices from ``fragment``'s (made on first use)."""
+        if fragment.recipe is None:
+            lo, hi = fragment.trimmed
+            positions = self._position_of(fragment)
+            steps = []
+            for u in range(lo, hi):
+                vertex = self.reduced.vertices[u]
+                p = vertex.parent
+                node = positions[id(self.origins[fragment.originals[u - lo]])]
+                given: tuple[str, ...]
+                if isinstance(vertex, ScopeVertex):
+                    tag, given = _SCOPE, ("var_maps",)
+                elif isinstance(vertex, TaskVertex):
+                    tag, given = _TASK, ("content", "instance")
+                else:
+                    tag, given = _DECOMPOSITION, ("content", "decomposition")
+                steps.append(_Step(vertex, p - lo if p >= lo else ~self.position[p], node, tag,
+                                   vertex_copier(type(vertex), given)))
+            fragment.recipe = _Recipe(steps, [tree_kind[u] for u in range(lo, hi)])
+        return fragment.recipe
 
     def _in_full_order(self, items: list[tuple[int, V]]) -> Iterator[tuple[int, V, _Placed | None]]:
         """``items`` keyed by reduced vertex, in the order the reduced construction added them,
@@ -374,14 +394,28 @@ class Stamper:
                 for inner, listed in by_fragment.get(placed.fragment.number, ()):
                     yield placed.trimmed(inner), listed, placed
 
-    def _partner_records(self, placed: _Placed) -> dict[int, ExecutionPartner]:
+    def _partner_records(self, placed: _Placed) -> tuple[list[ExecutionPartner], dict[int, list[int]]]:
         """The partner records of a copy (one per task and flags, as the full construction
-        shares them), by the id of its representative's record they stand for."""
+        shares them) in the order of its representative's, and where each partner list of the
+        representative's tasks finds its records there (by the list's id)."""
+        fragment = placed.fragment
+        if fragment.partners is None:
+            lo, hi = fragment.trimmed
+            place: dict[int, int] = {}
+            records: list[ExecutionPartner] = []
+            lists: dict[int, list[int]] = {}
+            for t in range(lo, hi):
+                partners = self.reduced.ec_partners(t)
+                for p in partners:
+                    if id(p) not in place:
+                        place[id(p)] = len(records)
+                        records.append(p)
+                lists[id(partners)] = [place[id(p)] for p in partners]
+            fragment.partners = (records, lists)
         if placed.partners is None:
-            lo, hi = placed.fragment.trimmed
-            records = {id(p): p for t in range(lo, hi) for p in self.reduced.ec_partners(t)}
-            placed.partners = {k: ExecutionPartner(placed.trimmed(p.task), p.group, p.divisible) for k, p in records.items()}
-        return placed.partners
+            shift = placed.start - fragment.trimmed[0]
+            placed.partners = [ExecutionPartner(p.task + shift, p.group, p.divisible) for p in fragment.partners[0]]
+        return placed.partners, fragment.partners[1]
 
     def _untrimmed_outside(self, u: int) -> int:
         """Full untrimmed position of an untrimmed vertex outside the stamped copies."""
@@ -420,15 +454,49 @@ class _Content:
     def scope(self, vertex: S, origin: RatNode, index: int, parent: int) -> S:
         return vertex.stamped(index, parent, var_maps=self._node(origin).var_maps)
 
-    def vertex(self, vertex: Vertex, origin: RatNode, index: int, parent: int) -> Vertex:
-        if isinstance(vertex, ScopeVertex):
-            return self.scope(vertex, origin, index, parent)
-        inst = self.instances[self._node(origin).content]
-        if isinstance(vertex, TaskVertex):
-            return vertex.stamped(index, parent, content=inst.id, instance=inst)
-        assert isinstance(vertex, DecompositionVertex)
-        old = vertex.decomposition
-        if inst is not self._task:
-            self._task, self._binding = inst, inst.binding
-        dec = Decomposition(f"{inst.id}|{old.number}", inst, old.number, old.path, ground_path(old.path, self._binding))
-        return vertex.stamped(index, parent, content=dec.id, decomposition=dec)
+    def make(self, recipe: _Recipe, base: int, new: TaskGraphBuilder) -> None:
+        """Add this copy's vertices, from ``base`` on, as ``recipe`` says."""
+        nodes, instances = self.copy, self.instances
+        made: list[Vertex] = []
+        inst: TaskInstance | None = None
+        binding: dict[str, Value] = {}
+        for index, step in enumerate(recipe.steps, start=base):
+            parent = base + step.parent if step.parent >= 0 else ~step.parent
+            node = nodes[step.node]
+            if step.tag == _SCOPE:
+                made.append(step.copy(step.vertex, index, parent, node.var_maps))
+                continue
+            task = instances[node.content]
+            if step.tag == _TASK:
+                made.append(step.copy(step.vertex, index, parent, task.id, task))
+                continue
+            if task is not inst:
+                inst, binding = task, task.binding
+            old = step.vertex.decomposition  # type: ignore[union-attr]
+            dec = Decomposition(f"{task.id}|{old.number}", task, old.number, old.path, ground_path(old.path, binding))
+            made.append(step.copy(step.vertex, index, parent, dec.id, dec))
+        new.add_children(made, recipe.kinds)
+
+
+_SCOPE, _TASK, _DECOMPOSITION = range(3)
+
+
+class _Step(NamedTuple):
+    """One vertex of a stamped copy: made from ``vertex`` of its representative, under the
+    copy's vertex at ``parent`` (relative to the copy's first; ``~`` an absolute one outside
+    it), with the content of the copy's annotation node at ``node`` (in its depth-first walk)."""
+
+    vertex: Vertex
+    parent: int
+    node: int
+    tag: int  # _SCOPE, _TASK or _DECOMPOSITION: which content the vertex takes
+    copy: Callable[..., Vertex]  # the vertex copier for that content (model.task_graph.vertex_copier)
+
+
+@dataclass
+class _Recipe:
+    """How a copy of a fragment makes its vertices: one step per vertex, and the kind of the
+    edge from its parent."""
+
+    steps: list[_Step]
+    kinds: list[EdgeKind]

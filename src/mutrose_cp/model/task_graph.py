@@ -47,17 +47,17 @@ class Decomposition:
     predicates: GroundPredicates
 
 
-# per vertex class and fields given anew: a function copying a vertex (see _copier)
-_COPIERS: dict[tuple[type, tuple[str, ...]], Callable[..., Any]] = {}
+# per vertex class and fields given anew: a function copying a vertex (see vertex_copier)
+_VERTEX_COPIERS: dict[tuple[type, tuple[str, ...]], Callable[..., Any]] = {}
 
 
-def _copier(cls: type, given: tuple[str, ...]) -> Callable[..., Any]:
+def vertex_copier(cls: type, given: tuple[str, ...]) -> Callable[..., Any]:
     """A function ``(vertex, index, parent, *given values)`` that copies a ``cls`` vertex with
     those fields set, slot by slot.  Trimming and stamping copy hundreds of thousands of
     vertices: ``dataclasses.replace`` re-runs the frozen ``__init__``, and a loop over the
     fields took three times as long as this straight-line function, generated once per class
     and set of fields (as ``dataclasses`` generates ``__init__``)."""
-    copier = _COPIERS.get((cls, given))
+    copier = _VERTEX_COPIERS.get((cls, given))
     if copier is None:
         names = [f.name for f in dataclasses.fields(cls)]
         params = ("index", "parent", *given)
@@ -65,7 +65,7 @@ def _copier(cls: type, given: tuple[str, ...]) -> Callable[..., Any]:
         body = "".join(f"    set_(new, {n!r}, {n if n in params else 'vertex.' + n})\n" for n in names)
         namespace: dict[str, Any] = {"new_": object.__new__, "set_": object.__setattr__, "cls": cls}
         exec(f"def copy(vertex, {', '.join(params)}):\n    new = new_(cls)\n{body}    return new\n", namespace)
-        copier = _COPIERS[(cls, given)] = namespace["copy"]
+        copier = _VERTEX_COPIERS[(cls, given)] = namespace["copy"]
     return copier
 
 
@@ -79,13 +79,13 @@ class _Vertex:
 
     def moved(self, index: int, parent: int) -> Self:
         """The same vertex at another position: trimming renumbers the graph."""
-        copied: Self = _copier(type(self), ())(self, index, parent)
+        copied: Self = vertex_copier(type(self), ())(self, index, parent)
         return copied
 
     def stamped(self, index: int, parent: int, **content: Any) -> Self:
         """The same vertex at another position with other content: a vertex of a forAll copy
         made from the same vertex of an identical copy (:mod:`mutrose_cp.stamping`)."""
-        copied: Self = _copier(type(self), tuple(content))(self, index, parent, *content.values())
+        copied: Self = vertex_copier(type(self), tuple(content))(self, index, parent, *content.values())
         return copied
 
 
@@ -410,6 +410,30 @@ class TaskGraphBuilder(_Adjacency):
         self.add(vertex)
         self.add_new_edge(vertex.parent, vertex.index, kind)
         return vertex
+
+    def add_children(self, made: Sequence[Vertex], kinds: Sequence[EdgeKind]) -> None:
+        """:meth:`add_child` for each vertex of ``made`` with the edge kind beside it, in one
+        loop: a stamped forAll copy's vertices (a large mission adds hundreds of thousands)."""
+        vertices, edges = self.vertices, self._edges
+        assert edges.open and edges.decompositions is not None, "a frozen graph takes no vertices"
+        successors, by_kind, by_task = edges.successors, edges.by_kind, edges.decompositions
+        for vertex, kind in zip(made, kinds):
+            assert vertex.index == len(vertices), (vertex.index, len(vertices))
+            vertices.append(vertex)
+            successors.append(_NO_SUCCESSORS)
+            a, b = vertex.parent, vertex.index
+            if isinstance(vertex, DecompositionVertex):
+                by_task.setdefault(a, []).append(vertex)
+            listed = successors[a]
+            if isinstance(listed, list):
+                listed.append((b, kind))
+            else:  # the parent's first edge
+                successors[a] = [(b, kind)]
+            targets = by_kind[kind].get(a)
+            if targets is None:
+                by_kind[kind][a] = [b]
+            else:
+                targets.append(b)
 
     def add_new_edge(self, a: int, b: int, kind: EdgeKind) -> None:
         """An AND, OR or CD edge ``(a, b)`` that the caller knows is not in the graph yet (see
