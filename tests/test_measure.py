@@ -73,3 +73,16 @@ def test_what_a_run_printed_is_read_once_for_every_caller():
     assert run.ending == "killed by signal 999"
     assert Measurement(-9, 1.0, 10.0, "", "").ending == "killed by SIGKILL"
     assert Measurement(3, 1.0, 10.0, "", "").ending == "exit status 3" and Measurement(3, 1.0, 10.0, "", "").summary is None
+
+
+# a parent and its forked child, each holding 150 MB of its own at the same time
+TWO_HOLDERS = [sys.executable, "-c", "import os, time; pid = os.fork(); held = b'x' * (150 << 20); time.sleep(1.0); "
+               "os._exit(0) if pid == 0 else os.waitpid(pid, 0)"]
+
+
+@pytest.mark.skipif(not Path("/proc/self/smaps_rollup").exists(), reason="sampling reads /proc/<pid>/smaps_rollup")
+def test_the_peak_memory_counts_every_process_of_the_run(tmp_path):
+    """The kernel's peak is one process's (about 160 MB here); the run held twice that."""
+    run = run_measured(TWO_HOLDERS, tmp_path, 60)
+    assert run.succeeded, run.stderr
+    assert run.peak_mb > 290

@@ -1,8 +1,8 @@
 """Run a command as a child process and measure it: wall time, peak memory, exit status.
 
-The parent does the measuring (``os.wait4`` returns the child's peak resident set size), so the
-numbers cover the whole process, interpreter start-up included, and the child need not
-cooperate.  ``compare``, ``batch`` and the benchmarks measure commands this way.
+The parent does the measuring (``os.wait4`` returns the child's peak resident set size, and the
+total memory of its process tree is sampled while it runs), so the numbers cover the whole
+process, interpreter start-up and helper processes included, and the child need not cooperate.  ``compare``, ``batch`` and the benchmarks measure commands this way.
 
 The child runs in a session of its own, hence its own process group: at the time limit the whole
 group is killed, so no helper process it started outlives it.  A Ctrl-C at the terminal reaches
@@ -83,6 +83,58 @@ class Measurement:
         return f"exit status {status}"
 
 
+class _TreeMemory:
+    """The largest total memory of a process and its descendants, sampled while it runs (Linux).
+
+    The kernel's peak (``ru_maxrss``) is that of one process; a command that forks a helper
+    (``decompose`` writes its output's head in a second process) uses the sum.  Each process's
+    proportional set size (``Pss`` in ``smaps_rollup``: shared pages split between the processes
+    sharing them) is summed.  Reading it walks the process's page tables, so samples are spaced
+    by twenty times what the last one took (at least ``SAMPLE_SECONDS``): the measuring takes
+    at most a twentieth of a core."""
+
+    SAMPLE_SECONDS = 0.1
+
+    def __init__(self, pid: int) -> None:
+        self.pid = pid
+        self.peak_kb = 0
+        self.next = time.perf_counter() + self.SAMPLE_SECONDS
+        self.available = os.path.exists(f"/proc/{pid}/smaps_rollup")
+
+    def sample(self) -> None:
+        now = time.perf_counter()
+        if not self.available or now < self.next:
+            return
+        total = sum(_pss_kb(p) for p in _tree(self.pid))
+        self.peak_kb = max(self.peak_kb, total)
+        self.next = now + max(self.SAMPLE_SECONDS, 20 * (time.perf_counter() - now))
+
+
+def _tree(pid: int) -> list[int]:
+    """``pid`` and its descendants (those that still run)."""
+    found, stack = [], [pid]
+    while stack:
+        p = stack.pop()
+        found.append(p)
+        try:
+            with open(f"/proc/{p}/task/{p}/children", encoding="ascii") as fh:
+                stack.extend(int(c) for c in fh.read().split())
+        except OSError:
+            continue
+    return found
+
+
+def _pss_kb(pid: int) -> int:
+    try:
+        with open(f"/proc/{pid}/smaps_rollup", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Pss:"):
+                    return int(line.split()[1])
+    except (OSError, ValueError):
+        pass
+    return 0
+
+
 def _peak_mb(usage: resource.struct_rusage) -> float:
     """``ru_maxrss`` in megabytes: Linux counts kilobytes, macOS bytes."""
     return usage.ru_maxrss / (1024 * 1024 if sys.platform == "darwin" else 1024)
@@ -95,12 +147,15 @@ def _kill_group(pid: int) -> None:
         pass
 
 
-def _wait(pid: int, deadline: float, cancel: threading.Event | None) -> tuple[int, resource.struct_rusage] | None:
+def _wait(pid: int, deadline: float, cancel: threading.Event | None,
+          memory: _TreeMemory | None = None) -> tuple[int, resource.struct_rusage] | None:
     """The child's wait status and resource usage once it ends; None at the deadline."""
     while True:
         done, status, usage = os.wait4(pid, os.WNOHANG)
         if done:
             return status, usage
+        if memory is not None:
+            memory.sample()
         if cancel is not None and cancel.is_set():
             raise Cancelled()
         remaining = deadline - time.perf_counter()
@@ -123,17 +178,19 @@ def run_measured(command: Sequence[str], cwd: str | os.PathLike[str], time_limit
     the child), standard input is empty; ``pass_fds`` are left open in the child.  Setting
     ``cancel`` kills the child and raises :class:`Cancelled`.
 
-    The peak memory is the kernel's: the largest resident set the child had, counting the
-    parent's own when it was started (``fork`` copies it), so it is exact for a small parent
-    only."""
+    The peak memory is the larger of the kernel's (the largest resident set the child had,
+    counting the parent's own when it was started: ``fork`` copies it, so it is exact for a
+    small parent only) and the largest total of the child's process tree, sampled
+    (:class:`_TreeMemory`)."""
     start = time.perf_counter()
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
         child = subprocess.Popen(list(command), cwd=Path(cwd), stdin=subprocess.DEVNULL, stdout=out, stderr=err,
                                  env=None if env is None else dict(env), start_new_session=True,
                                  pass_fds=tuple(pass_fds))
         ended = None
+        memory = _TreeMemory(child.pid)
         try:
-            ended = _wait(child.pid, start + time_limit, cancel)
+            ended = _wait(child.pid, start + time_limit, cancel, memory)
         finally:
             if ended is None:  # the time limit, a cancel, or the parent was interrupted: end the whole group
                 _kill_group(child.pid)
@@ -144,4 +201,5 @@ def run_measured(command: Sequence[str], cwd: str | os.PathLike[str], time_limit
             status, usage = ended
             child.returncode = os.waitstatus_to_exitcode(status)
         return Measurement(exit_status=None if ended is None else child.returncode,
-                           seconds=seconds, peak_mb=_peak_mb(usage), stdout=_text(out), stderr=_text(err))
+                           seconds=seconds, peak_mb=max(_peak_mb(usage), memory.peak_kb / 1024),
+                           stdout=_text(out), stderr=_text(err))
