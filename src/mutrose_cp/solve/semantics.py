@@ -232,12 +232,13 @@ def robot_parameters(domain: Domain, dec: Decomposition) -> list[tuple[str, str]
 
 def robot_preconditions(domain: Domain, dec: Decomposition) -> list[Literal]:
     """Non-ground boolean preconditions over robot parameters only (checked through ECs)."""
+    free = [c for c in dec.predicates.preconditions if isinstance(c, Literal) and not is_ground(c.args)]
+    if not free:
+        return []
     task = domain.task_by_name[dec.instance.name]
     types = {p.name: p.type for p in task.parameters}
     out = []
-    for c in dec.predicates.preconditions:
-        if not isinstance(c, Literal) or is_ground(c.args):
-            continue
+    for c in free:
         params = [a for a in c.args if a in types]
         if params and all(types[a] in domain.robot_sorts for a in params):
             out.append(c)
@@ -436,6 +437,7 @@ class EffectScopes:
         self.tg = tg
         self.enablers = context_enablers(tg)
         self._subtree: dict[int, list[int]] = {}
+        self._runs: dict[int, tuple[tuple[int, int], ...]] = {}
 
     def subtree(self, v: int) -> list[int]:
         """The decomposition vertices below ``v`` (its own, for a task), in vertex order."""
@@ -464,26 +466,37 @@ class EffectScopes:
     def preceding_runs(self, v: int) -> list[tuple[int, int]]:
         """:meth:`preceding` as runs of vertex indices: the earlier children of each enclosing
         sequence, from its first child up to the branch that holds ``v`` (depth-first numbering)."""
-        tg = self.tg
-        runs: list[tuple[int, int]] = []
-        child, p = v, tg.vertices[v].parent
-        while p >= 0:
-            if tg.vertices[p].content == ";":
+        return list(self._preceding_runs(v))
+
+    def _preceding_runs(self, v: int) -> tuple[tuple[int, int], ...]:
+        """:meth:`preceding_runs`, kept per vertex: a vertex's runs are its parent's, plus one
+        when the parent is a sequence (the runs of a sequence's earlier children start before
+        those of the sequences above it, so the new run goes last)."""
+        tg, runs = self.tg, self._runs
+        path = []  # from v up to the first vertex whose runs are known (or the root)
+        u = v
+        while u >= 0 and u not in runs:
+            path.append(u)
+            u = tg.vertices[u].parent
+        known = runs[u] if u >= 0 else ()
+        for u in reversed(path):
+            p = tg.vertices[u].parent
+            if p >= 0 and tg.vertices[p].content == ";":
                 first = tg.children(p)[0]
-                if first != child:
-                    runs.append((first, child))
-            child, p = p, tg.vertices[p].parent
-        return sorted(runs)
+                if first != u:
+                    known = (*known, (first, u))
+            runs[u] = known
+        return known
 
     def seen_runs_by_task(self, t: int) -> Seen:
         """:meth:`seen_by_task` as a :class:`Seen`."""
-        return Seen(tuple(self.preceding_runs(t)), frozenset(self.enablers.get(t, ())))
+        return Seen(self._preceding_runs(t), frozenset(self.enablers.get(t, ())))
 
     def seen_runs_by_achieve(self, v: int) -> Seen:
         """:meth:`seen_by_achieve` as a :class:`Seen`: the runs before ``v`` and its own subtree."""
         below = self.subtree(v)
         own = [(v, below[-1] + 1)] if below else []
-        return Seen(tuple(self.preceding_runs(v) + own))
+        return Seen((*self._preceding_runs(v), *own))
 
     def seen_by_task(self, t: int) -> set[int]:
         """The decompositions whose effects make the state where task ``t`` starts."""
