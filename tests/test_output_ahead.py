@@ -20,6 +20,7 @@ from mutrose_cp.errors import MissionError
 from mutrose_cp.interrupt import FAULT_ENV
 from mutrose_cp.mission import Mission, find_mission_files
 from mutrose_cp.output import OutputModel, write_output
+from mutrose_cp import output_ahead
 from mutrose_cp.output_ahead import AHEAD_MIN_DECOMPOSITIONS, output_while_solving
 from mutrose_cp.solve.decompose import DecompositionRequest
 
@@ -195,3 +196,18 @@ def test_leaving_early_kills_a_blocked_writer(tmp_path: Path) -> None:
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert result.stdout == "no child left\n"
+
+
+def test_the_largest_missions_write_their_head_in_one_process(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Above ``AHEAD_MAX_DECOMPOSITIONS`` the memory a child copies matters more: no fork."""
+    require_reference()
+    mission = Mission.load(*generate("vital-signs", 6, tmp_path))
+    assert len(mission.task_graph.decompositions()) > 10
+    monkeypatch.setattr(output_ahead, "AHEAD_MAX_DECOMPOSITIONS", 10)
+
+    def no_fork() -> int:
+        raise AssertionError("forked")
+
+    monkeypatch.setattr(os, "fork", no_fork)
+    alone, ahead = _written_both_ways(mission, tmp_path)
+    assert ahead == alone
