@@ -112,12 +112,33 @@ done about it:
   its vertices. At 5000 rooms (one core) Task Graph 3.47 s → 1.95 s, constraints 2.0 s →
   0.18 s; whole run 11.6 s → 8.3 s, peak 437 MB → 418 MB (50,000 rooms: 127 s / 3972 MB →
   90 s / 3782 MB), the same bytes.
-* **Still to do** for the time targets (5 s at 5000 rooms, 60 s at 50,000): the stages that
-  still work copy by copy. At 5000 rooms (one core): encoding 1.8 s, output 1.7 s, Task Graph
-  1.95 s (mostly making the stamped vertices and grounding their decompositions), expansion
-  0.9 s, space 0.7 s. Stamping the encoding and the space needs copies that are equal in the
-  world too (vital signs: the patients' conditions), and a proof that a copy's facts are its
-  own; the output's task entries are already formatted from templates.
+* **Stamped copies in the output; the output's head beside the solve.** A stamped copy's task
+  entries are its source copy's with its own keys, ids and values: they are formatted once per
+  source copy with a slot for each, and filled per copy with one string format
+  (`copy_blocks.py`, with the rules under which that gives the same bytes): task entries at
+  5000 rooms 1.19 s → 0.68 s. Most of the output (the actions, the task entries and the
+  million constraints: 300 of its 330 MB) does not depend on the solver, so on two cores a
+  forked child writes it to the output's temporary file while the parent encodes and solves;
+  the parent then writes the decompositions and the space after it (`output_ahead.py`, from
+  20,000 to 250,000 decompositions: the child copies the pages of the objects it reads, 410 +
+  260 MB in all at 5000 rooms; at 50,000 rooms it would be 3.8 + 2.3 GB, where memory comes
+  first). The stamped vertices are made from a recipe worked out once per source fragment, in
+  one loop: Task Graph 1.75 s → 1.32 s. Whole run at 5000 rooms 8.2 s → 6.3 s (this machine,
+  the same day), the same bytes. The peak memory measured is now the larger of one process's
+  peak and the sampled total of the run's processes (`measure.py`).
+* **Still to do** for the time targets (5 s at 5000 rooms, 60 s at 50,000). At 5000 rooms the
+  run's critical path is one process: loading and the initial state 0.25 s, expansion 0.85 s,
+  Task Graph 1.3 s, constraints 0.2 s, encoding 1.7 s and space 0.9 s (each about 0.2 s slower
+  while the child writes: the pages the two processes share are copied on write), the
+  output's tail 0.3 s. Trimming the per-object work of these stages gave 5-10 % each (kept
+  where it did, dropped where it was noise: a specialised writer of the space section, exiting
+  without freeing the mission). What is left works copy by copy because the copies differ in
+  the world: a vital-signs room's patients have other conditions, so the encoding's constant
+  folding and the space's components differ between rooms. The next step is to stamp the
+  encoding per class of copies that are also equal in the world (the atoms a copy reads are
+  its own, with the same initial values up to renaming), replaying the source copy's records
+  task by task so that variables and records keep the full encoding's order, and to take the
+  space's components of such copies from their class's.
 """
 
 
