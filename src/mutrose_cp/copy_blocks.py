@@ -107,7 +107,7 @@ class CopyBlocks:
                 self._blocks[lo] = None
                 return None
             texts.append(f'        "{_slot_text(slot("key", self.key[d.index]))}": {entry}')
-        constants = frozenset().union(*(self.templates.constants(d.decomposition.path) for d in self.decs[lo:hi]))
+        constants = frozenset().union(*(d.decomposition.path.constants for d in self.decs[lo:hi]))
         block = self._blocks[lo] = _Block(_Template(",\n".join(texts)), slots, constants)
         return block
 

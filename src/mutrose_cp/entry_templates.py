@@ -119,10 +119,9 @@ class EntryTemplates:
         known = self._actions.get(id(path))
         if known is None:
             actions = actions_tree(path)
-            constants = frozenset(a for s in path.steps for c in (*s.preconditions, *s.effects, *s.numeric_effects)
-                                  for a in c.args if not a.startswith("?"))
             same = self._same_steps.setdefault(path.steps, id(path))
-            known = self._actions[id(path)] = (path, _member("decomposition", boost_json(actions, 12)), constants, same)
+            known = self._actions[id(path)] = (path, _member("decomposition", boost_json(actions, 12)), path.constants,
+                                               same)
         return known[1], known[2], known[3]
 
     def _cached(self, key: Hashable, make: Callable[[], str]) -> str:
@@ -250,10 +249,6 @@ class EntryTemplates:
                          + _member("divisible", f'"{divisible}"')),
         )
         return "{\n" + ",\n".join(members) + "\n        }"
-
-    def constants(self, path: DecompositionPath) -> frozenset[str]:
-        """The constants ``path``'s steps name: printed as themselves, never slotted."""
-        return self._path(path)[1]
 
 
 def _slot_text(k: int) -> str:

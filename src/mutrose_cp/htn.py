@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Callable, Mapping, Sequence
 
 from .conditions import compare
@@ -82,6 +83,13 @@ class DecompositionPath:
     @property
     def actions(self) -> tuple[Step, ...]:
         return tuple(s for s in self.steps if not s.pseudo)
+
+    @cached_property
+    def constants(self) -> frozenset[str]:
+        """The constants the steps name (arguments that are no variables): grounding and
+        printing keep them as themselves, whatever the instance's values."""
+        return frozenset(a for s in self.steps for c in (*s.preconditions, *s.effects, *s.numeric_effects)
+                         for a in c.args if not a.startswith("?"))
 
 
 # ---------------------------------------------------------------------------------------------
