@@ -132,7 +132,8 @@ done about it:
   while the child writes: the pages the two processes share are copied on write), the
   output's tail 0.3 s. Trimming the per-object work of these stages gave 5-10 % each (kept
   where it did, dropped where it was noise: a specialised writer of the space section, exiting
-  without freeing the mission). What is left works copy by copy because the copies differ in
+  without freeing the mission, grounding a stamped copy's decompositions by renaming its
+  source's grounded predicates instead of grounding its path). What is left works copy by copy because the copies differ in
   the world: a vital-signs room's patients have other conditions, so the encoding's constant
   folding and the space's components differ between rooms. The next step is to stamp the
   encoding per class of copies that are also equal in the world (the atoms a copy reads are
