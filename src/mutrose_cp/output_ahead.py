@@ -91,12 +91,12 @@ def _head_written_beside(builder: OutputBuilder, fh: IO[str], path: Path | str) 
         os.close(read_end)
         _write_head(builder, fh, write_end)
     os.close(write_end)
+    pipe = os.fdopen(read_end, "rb")
     done = False
 
     def join() -> None:
         nonlocal done
-        with os.fdopen(read_end, "rb") as pipe:
-            report = pipe.read()
+        report = pipe.read()  # until the child ends
         _, status = os.waitpid(pid, 0)
         done = True
         if report:
@@ -108,15 +108,12 @@ def _head_written_beside(builder: OutputBuilder, fh: IO[str], path: Path | str) 
     try:
         yield join
     finally:
+        pipe.close()
         if not done:
             try:
                 os.kill(pid, signal.SIGKILL)
             finally:
                 os.waitpid(pid, 0)
-                try:
-                    os.close(read_end)
-                except OSError:
-                    pass  # closed by join, which stopped while reading
 
 
 def _write_head(builder: OutputBuilder, fh: IO[str], report: int) -> None:
