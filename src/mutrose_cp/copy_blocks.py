@@ -4,7 +4,7 @@ A stamped copy (``TaskGraph.stamped_copies``) has the vertices of its source cop
 names: other keys and ids, another room, other patients.  Its task entries are then its source's
 with those names put in: the source's entries are formatted once, with a slot for every key, id
 and value (``EntryTemplates.slotted_entry``), and each copy fills the slots with its own names,
-one string join per copy instead of one formatting per entry.
+one string format per copy instead of one formatting per entry.
 
 A copy is filled only where that gives the bytes that formatting its entries one by one gives:
 
