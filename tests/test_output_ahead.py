@@ -211,3 +211,20 @@ def test_the_largest_missions_write_their_head_in_one_process(tmp_path: Path, mo
     monkeypatch.setattr(os, "fork", no_fork)
     alone, ahead = _written_both_ways(mission, tmp_path)
     assert ahead == alone
+
+
+def test_a_memory_limited_run_writes_its_head_in_one_process(tmp_path: Path) -> None:
+    """``batch --memory-mb`` limits each process: a second one could take the run past it."""
+    require_reference()
+    mission = _large_mission(tmp_path)
+    out = tmp_path / "out.json"
+    script = ("import os, resource, sys\n"
+              "resource.setrlimit(resource.RLIMIT_DATA, (8 << 30, 8 << 30))\n"
+              "def no_fork(): raise AssertionError('forked')\n"
+              "os.fork = no_fork\n"
+              "from mutrose_cp.cli import main\n"
+              "sys.exit(main(sys.argv[1:]))\n")
+    result = subprocess.run([sys.executable, "-c", script, "decompose", *map(str, mission), "-q", "-o", str(out)],
+                            cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert out.stat().st_size > 0

@@ -16,14 +16,15 @@ head; if the parent stops first (an error, an interrupt), the child is killed an
 the temporary file is removed, so nothing is left running or written.
 
 The head is written in the parent, after the solve, where forking is not available or not
-worth it: one core, a small mission, standard output or another format; and on the largest
-missions, where the memory the child copies (``AHEAD_MAX_DECOMPOSITIONS``) matters more than
-the time it saves.
+worth it: one core, a small mission, standard output or another format; and where memory comes
+first: on the largest missions, where the memory the child copies (``AHEAD_MAX_DECOMPOSITIONS``)
+matters more than the time it saves, and under a memory limit (which holds for each process).
 """
 from __future__ import annotations
 
 import os
 import pickle
+import resource
 import signal
 from contextlib import contextmanager
 from pathlib import Path
@@ -47,7 +48,15 @@ Finish = Callable[[Iterable[list[int]], Mapping[str, object] | None], None]
 def _ahead(model: OutputModel, path: Path | str, file_type: str, json_style: str, minimum: int) -> bool:
     """Whether the head is worth writing in a second process (module docstring)."""
     return (file_type == "json" and json_style == "boost" and os.fspath(path) != STDOUT and hasattr(os, "fork")
-            and _cores() > 1 and minimum <= len(model.tg.decompositions()) <= AHEAD_MAX_DECOMPOSITIONS)
+            and _cores() > 1 and not _memory_limited()
+            and minimum <= len(model.tg.decompositions()) <= AHEAD_MAX_DECOMPOSITIONS)
+
+
+def _memory_limited() -> bool:
+    """Whether the process runs under a memory limit (``batch --memory-mb`` sets ``RLIMIT_DATA``):
+    the limit holds for each process, so a second one could take the run past it."""
+    return any(resource.getrlimit(limit)[0] != resource.RLIM_INFINITY
+               for limit in (resource.RLIMIT_DATA, resource.RLIMIT_AS))
 
 
 def _cores() -> int:
