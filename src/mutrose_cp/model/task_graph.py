@@ -361,6 +361,15 @@ class TaskGraph(_Adjacency):
     stamped_copies: tuple[tuple[StampedCopy, ...], ...] = field(default=(), compare=False)
 
     @cached_property
+    def _decomposition_vertices(self) -> tuple[DecompositionVertex, ...]:
+        return tuple(v for v in self.vertices if isinstance(v, DecompositionVertex))
+
+    def decompositions(self) -> list[DecompositionVertex]:
+        """The decomposition vertices in index order: found once (the stages ask for them
+        several times, and a large graph has hundreds of thousands of vertices)."""
+        return list(self._decomposition_vertices)
+
+    @cached_property
     def decomposition_keys(self) -> dict[int, str]:
         """Decomposition vertex -> its output key, ``t0, t1, ...`` in vertex order; built once,
         for the output, its space section and the views that name the decompositions alike."""
