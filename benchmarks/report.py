@@ -133,13 +133,19 @@ done about it:
   output's tail 0.3 s. Trimming the per-object work of these stages gave 5-10 % each (kept
   where it did, dropped where it was noise: a specialised writer of the space section, exiting
   without freeing the mission, grounding a stamped copy's decompositions by renaming its
-  source's grounded predicates instead of grounding its path). What is left works copy by copy because the copies differ in
-  the world: a vital-signs room's patients have other conditions, so the encoding's constant
-  folding and the space's components differ between rooms. The next step is to stamp the
-  encoding per class of copies that are also equal in the world (the atoms a copy reads are
-  its own, with the same initial values up to renaming), replaying the source copy's records
-  task by task so that variables and records keep the full encoding's order, and to take the
-  space's components of such copies from their class's.
+  source's grounded predicates instead of grounding its path).
+
+  What is left works copy by copy because the copies differ in the world: a vital-signs room's patients have other conditions, so the
+  encoding's constant folding and the space's components differ between rooms. But they fall
+  in few classes: the 5000 rooms of the benchmark world are 8 classes of copies equal up to
+  renaming in the world too (1334, 1333, 1000, 334, 333, 333, 333 and 1 rooms). The next step
+  is to encode one copy per class and replay its records for the others: the encoding's phases
+  (choices, task rules, conflicts and achieve conditions) each meet a copy's vertices as one
+  run (the mission queue of the vital-signs world does), so a copy's records are its source's with the variables created in that run renumbered
+  and the copy's choice variables put in, where the atoms it reads are its own (no writer or
+  reader outside it) with the same initial values; the chains of those atoms are cloned with
+  them, so that readers after the copies share them as now. The model, and so the output,
+  stays the same; the space's components of such copies can then be taken from their class's.
 """
 
 
