@@ -28,6 +28,7 @@ from mutrose_cp.solve.semantics import (
     ConstraintIndex,
     EffectScopes,
     Effects,
+    ParallelConflicts,
     State,
     application_order,
     checks_parallel_conflicts,
@@ -276,6 +277,55 @@ def test_parallel_conflicts_name_the_setters_of_each_side():
     assert conflict.atom == ("door", ("x",))
     assert conflict.setting_true == (on1,)
     assert conflict.setting_false == (off1, off2)
+    assert _indexed_conflicts(tg, effects, par) == [conflict]
+
+
+def _indexed_conflicts(tg: TaskGraph, effects: dict[int, Effects], v: int) -> list:
+    """What :class:`ParallelConflicts` finds below ``v``, built from the writers of each atom in
+    application order (as the encoder keeps them)."""
+    writers: dict = {}
+    for d in application_order(effects):
+        for atom, value in effects[d].facts:
+            writers.setdefault(atom, []).append((d, value))
+    return ParallelConflicts(EffectScopes(tg), writers).below(v)
+
+
+def test_indexed_parallel_conflicts_are_those_inside_each_operator_only():
+    """Nested parallel operators: the outer one sees the conflicts of both inner ones and the
+    one between them; an inner one only its own, though the atom's other writers lie outside."""
+    g = Graph()
+    outer = g.op("#")
+    left = g.op("#", outer)
+    on1, off1 = g.task("AT1_1", left, sets(("door", True)), sets(("door", False)))
+    (keep1,) = g.task("AT2_1", left, sets(("light", True)))
+    right = g.op("#", outer)
+    (off2,) = g.task("AT1_2", right, sets(("light", False)))
+    (on2,) = g.task("AT2_2", right, sets(("door", True)))
+    tg = g.freeze()
+    effects = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
+    scopes = EffectScopes(tg)
+    for v in (outer, left, right):
+        assert _indexed_conflicts(tg, effects, v) == parallel_conflicts(v, scopes, effects)
+    assert [(c.atom[0], c.setting_true, c.setting_false) for c in _indexed_conflicts(tg, effects, outer)] == [
+        ("door", (on1, on2), (off1,)), ("light", (keep1,), (off2,))]
+    assert [c.atom[0] for c in _indexed_conflicts(tg, effects, left)] == ["door"]
+    assert _indexed_conflicts(tg, effects, right) == []
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(missions())
+def test_indexed_parallel_conflicts_agree_with_the_subtree_walk_on_random_missions(spec):
+    """The encoder's index of parallel conflicts finds what the exploratory algorithm's walk of
+    each operator's subtree finds, on every parallel operator of random missions."""
+    try:
+        tg = load_mission(spec).task_graph
+    except Exception:  # noqa: BLE001 - missions the pipeline refuses have no Task Graph
+        return
+    effects = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
+    scopes = EffectScopes(tg)
+    for v in range(len(tg.vertices)):
+        if checks_parallel_conflicts(tg, v):
+            assert _indexed_conflicts(tg, effects, v) == parallel_conflicts(v, scopes, effects)
 
 
 # --- robot-related preconditions (§7.4) -----------------------------------------------------------------

@@ -26,6 +26,7 @@ from .semantics import (
     ConstraintIndex,
     EffectScopes,
     Effects,
+    ParallelConflicts,
     Seen,
     achieve_tests,
     application_order,
@@ -34,7 +35,6 @@ from .semantics import (
     effects_of,
     initial_state,
     mission_queue,
-    parallel_conflicts,
     robot_precondition_writers,
     unique_branch_valid,
 )
@@ -91,6 +91,7 @@ class Encoder:
                 self.bool_writers.setdefault(key, []).append((d, val))
             for key, kind, amount in self.effects[d].numeric:
                 self.num_writers.setdefault(key, []).append((d, kind, amount))
+        self.conflicts = ParallelConflicts(self.scopes, self.bool_writers)
 
     # ------------------------------------------------------------------------------------------
     def encode(self) -> Encoding:
@@ -119,16 +120,21 @@ class Encoder:
                 self.x[d.index] = lit
                 all_x.append(lit)
                 if not unique_branch_valid(self.tg, d, self.initial, self.gm, self.config):
-                    self.m.clause([neg(lit)], self._label(f"pre:{d.content}", f"{d.content}: a precondition is false in the "
-                                                          "initial world state, or an achieve condition after it"))
+                    self.m.clause([neg(lit)], self._label(lambda: (
+                        f"pre:{d.content}", f"{d.content}: a precondition is false in the initial world state, "
+                                            "or an achieve condition after it")))
         self.m.records.append(Exactly(tuple(all_x), TRUE, label="unique-branch"))
         return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
 
-    def _label(self, key: str, text: str) -> str:
-        if self.explain:
-            self.labels[key] = text
-            return key
-        return ""
+    def _label(self, key_and_text: Callable[[], tuple[str, str]]) -> str:
+        """The label of a record, with its explanation kept, when explaining; else none.  The
+        key and text are made only then: a large mission posts a million records, and a label
+        names a precondition or fact by its repr."""
+        if not self.explain:
+            return ""
+        key, text = key_and_text()
+        self.labels[key] = text
+        return key
 
     # --- choices ---------------------------------------------------------------------------------
     def _choices(self, v: int, active: Lit) -> None:
@@ -143,7 +149,8 @@ class Encoder:
                 self.x[d.index] = lit
                 lits.append(lit)
             self.m.records.append(Exactly(tuple(lits), active,
-                                         label=self._label(f"task:{vx.content}", f"task instance {vx.content} needs exactly one decomposition")))
+                                         label=self._label(lambda: (f"task:{vx.content}", f"task instance {vx.content} "
+                                                                    "needs exactly one decomposition"))))
             return
         children = tg.children(v)
         if tg.is_or(v):
@@ -303,18 +310,19 @@ class Encoder:
         writers_seen: dict[AtomKey, Sequence[tuple[int, bool]]] = {}  # the decompositions share them
         for i, context in enumerate(tg.task(t).contexts):
             ok = self._state_test(context, seen, f"context({tg.vertices[t].content})")
-            self.m.clause([neg(self.active[t]), ok], self._label(
+            self.m.clause([neg(self.active[t]), ok], self._label(lambda: (
                 f"context:{t}:{i}", f"task instance {tg.vertices[t].content}: the creation condition "
-                f"{_show_test(context)} that an earlier task enables does not hold where it starts"))
+                f"{_show_test(context)} that an earlier task enables does not hold where it starts")))
         for dv in tg.decompositions_of(t):
             d = dv.index
             dec = dv.decomposition
             if contradicts_itself(dec):
-                self.m.clause([neg(self.x[d])], self._label(f"pre:{dec.id}", f"{dec.id}: its preconditions contradict each other"))
+                self.m.clause([neg(self.x[d])], self._label(lambda: (
+                    f"pre:{dec.id}", f"{dec.id}: its preconditions contradict each other")))
             for c in dec.predicates.checked_preconditions:
                 if any(a.startswith("?") for a in c.args):
                     continue
-                label = self._label(f"pre:{dec.id}:{c}", f"{dec.id}: precondition {_show(c)}")
+                label = self._label(lambda: (f"pre:{dec.id}:{c}", f"{dec.id}: precondition {_show(c)}"))
                 if isinstance(c, Literal):
                     atom = (c.predicate, c.args)
                     if atom not in writers_seen:
@@ -336,16 +344,17 @@ class Encoder:
             for e, value in reversed(writers):
                 if value != lit.positive:
                     self.m.clause([neg(self.x[d]), neg(self.x[e])] + later,
-                                  self._label(f"robot:{dec.id}:{lit}", f"{dec.id}: robot precondition {_show(lit)} "
-                                              f"contradicts the effect of {tg.vertices[e].content}"))
+                                  self._label(lambda: (f"robot:{dec.id}:{lit}", f"{dec.id}: robot precondition {_show(lit)} "
+                                              f"contradicts the effect of {tg.vertices[e].content}")))
                 later.append(self.x[e])
 
     def _conflicts(self, v: int) -> None:
         """AND-parallel: no two chosen decompositions below ``v`` set a fact both ways."""
-        for c in parallel_conflicts(v, self.scopes, self.effects):
+        for c in self.conflicts.below(v):
             atom = c.atom
-            label = self._label(f"conflict:{v}:{atom}", f"parallel tasks below {self.tg.scope(v).goal or 'operator ' + str(v)} "
-                                f"set {_atom_name(atom)} both true and false")
+            label = self._label(lambda: (
+                f"conflict:{v}:{atom}", f"parallel tasks below {self.tg.scope(v).goal or 'operator ' + str(v)} "
+                                        f"set {_atom_name(atom)} both true and false"))
             if len(c.setting_true) * len(c.setting_false) <= 16:
                 for a in c.setting_true:
                     for b in c.setting_false:
@@ -366,7 +375,8 @@ class Encoder:
         for i, part in enumerate(parts):
             holds = self._state_test(part, decs, f"achieve({goal}@{v})")
             self.m.clause([neg(self.active[v]), holds],
-                          self._label(f"achieve:{v}:{goal}:{i}", f"achieve condition of goal {goal}: {_show_test(part)}"))
+                          self._label(lambda: (f"achieve:{v}:{goal}:{i}",
+                                               f"achieve condition of goal {goal}: {_show_test(part)}")))
 
 
 @dataclass

@@ -9,7 +9,8 @@ Both decomposers ask the same questions and answer them here:
 * context dependencies (§5.2, checked where the task starts): :func:`context_enablers`;
 * robot-related preconditions against execution-constrained partners (§7.4):
   :func:`robot_partners`, :func:`robot_precondition_writers`;
-* parallel conflicts (§7.3): :func:`checks_parallel_conflicts`, :func:`parallel_conflicts`;
+* parallel conflicts (§7.3): :func:`checks_parallel_conflicts`, :func:`parallel_conflicts` (and
+  :class:`ParallelConflicts`, the same for every operator of a graph at once);
 * achieve conditions (§7.5): :func:`achieve_tests`;
 * unique-branch missions (§7.7): :func:`unique_branch_valid`.
 
@@ -437,6 +438,7 @@ class EffectScopes:
         self.tg = tg
         self.enablers = context_enablers(tg)
         self._subtree: dict[int, list[int]] = {}
+        self._last: dict[int, int] = {}
         self._runs: dict[int, tuple[tuple[int, int], ...]] = {}
 
     def subtree(self, v: int) -> list[int]:
@@ -448,6 +450,21 @@ class EffectScopes:
             else:
                 self._subtree[v] = [d for c in tg.children(v) for d in self.subtree(c)]
         return self._subtree[v]
+
+    def last_below(self, v: int) -> int:
+        """The last decomposition vertex below ``v`` (-1 if none).  Vertices are numbered depth
+        first, so the decompositions below ``v`` are exactly those from ``v`` to this one: a
+        range, found without listing the subtree."""
+        last = self._last.get(v)
+        if last is None:
+            tg = self.tg
+            if isinstance(tg.vertices[v], TaskVertex):
+                own = tg.decompositions_of(v)
+                last = own[-1].index if own else -1
+            else:
+                last = max((self.last_below(c) for c in tg.children(v)), default=-1)
+            self._last[v] = last
+        return last
 
     def preceding(self, v: int) -> set[int]:
         """The decompositions an enclosing sequence puts before ``v``."""
@@ -494,8 +511,8 @@ class EffectScopes:
 
     def seen_runs_by_achieve(self, v: int) -> Seen:
         """:meth:`seen_by_achieve` as a :class:`Seen`: the runs before ``v`` and its own subtree."""
-        below = self.subtree(v)
-        own = [(v, below[-1] + 1)] if below else []
+        last = self.last_below(v)
+        own = [(v, last + 1)] if last >= 0 else []
         return Seen((*self._preceding_runs(v), *own))
 
     def seen_by_task(self, t: int) -> set[int]:
@@ -537,6 +554,45 @@ def parallel_conflicts(v: int, scopes: EffectScopes, effects: Mapping[int, Effec
             setting_true, setting_false = by_atom.setdefault(atom, ([], []))
             (setting_true if value else setting_false).append(d)
     return [ParallelConflict(atom, tuple(t), tuple(f)) for atom, (t, f) in sorted(by_atom.items()) if t and f]
+
+
+class ParallelConflicts:
+    """:func:`parallel_conflicts` of every parallel operator of one Task Graph, from each atom's
+    writers (the encoder's, in application order) instead of a walk of each operator's subtree:
+    nested parallel operators (one per forAll instance, below the one over all of them) would
+    walk every decomposition once per level.
+
+    An operator's decompositions are a range of vertex indices (:meth:`EffectScopes.last_below`),
+    and it sets an atom both ways exactly when the range holds two writers of the atom that are
+    adjacent in its writer list and write opposite values.  Those pairs are indexed by their
+    first writer, so an operator looks only at the pairs that start inside it."""
+
+    def __init__(self, scopes: EffectScopes, writers: Mapping[AtomKey, Sequence[tuple[int, bool]]]) -> None:
+        self.scopes = scopes
+        self._setters: dict[AtomKey, tuple[list[int], list[int]]] = {}
+        pairs: list[tuple[int, int, AtomKey]] = []
+        for atom, written in writers.items():
+            flips = [(a, b) for (a, va), (b, vb) in zip(written, written[1:]) if va != vb]
+            if flips:
+                pairs.extend((a, b, atom) for a, b in flips)
+                self._setters[atom] = ([d for d, value in written if value], [d for d, value in written if not value])
+        pairs.sort()
+        self._pairs = pairs
+        self._starts = [a for a, _, _ in pairs]
+
+    def below(self, v: int) -> list[ParallelConflict]:
+        """The atoms that two decompositions below operator ``v`` set both ways, by atom."""
+        if not self._pairs:
+            return []
+        lo, hi = v, self.scopes.last_below(v) + 1
+        starts, pairs = self._starts, self._pairs
+        atoms = {atom for _, b, atom in pairs[bisect_left(starts, lo):bisect_left(starts, hi)] if b < hi}
+        out = []
+        for atom in sorted(atoms):
+            true, false = self._setters[atom]
+            out.append(ParallelConflict(atom, tuple(true[bisect_left(true, lo):bisect_left(true, hi)]),
+                                        tuple(false[bisect_left(false, lo):bisect_left(false, hi)])))
+        return out
 
 
 # ---------------------------------------------------------------------------------------------
