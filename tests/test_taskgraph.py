@@ -263,14 +263,13 @@ def test_decomposition_keys_number_the_decompositions_in_vertex_order():
     assert list(keys.values()) == [f"t{i}" for i in range(len(keys))] and tg.decomposition_keys is keys
 
 
-def test_the_finished_graph_reads_a_tasks_decompositions_from_its_and_successors():
-    """When every task's decompositions are its AND successors, in order, the finished graph
-    reads them from there (no list per task); otherwise it keeps the lists.  Both answer alike."""
+def test_a_tasks_decompositions_are_its_decomposition_vertices_in_order():
+    """A task's decompositions are the decomposition vertices whose parent it is, in vertex
+    order, on the finished graph as while it is built; other vertices have none."""
     from mutrose_cp.mission import find_mission_files
     from mutrose_cp.model.task_graph import DecompositionVertex, TaskVertex
 
     tg = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / "item-delivery")).task_graph
-    assert tg._edges.decompositions is None
     for v in tg.vertices:
         expected = [d for d in tg.vertices if isinstance(d, DecompositionVertex) and d.parent == v.index]
         assert tg.decompositions_of(v.index) == expected
@@ -283,7 +282,7 @@ def test_the_finished_graph_reads_a_tasks_decompositions_from_its_and_successors
     dec = tg.decompositions_of(task.index)[0]
     first = b.add(DecompositionVertex(index=2, parent=1, content=dec.content, decomposition=dec.decomposition))
     b.add(DecompositionVertex(index=3, parent=1, content=dec.content, decomposition=dec.decomposition))
-    b.add_edge(1, 2, EdgeKind.AND)  # the second decomposition has no edge: the lists are kept
+    b.add_edge(1, 2, EdgeKind.AND)  # the second decomposition has no edge: it is still the task's
+    assert [d.index for d in b.decompositions_of(1)] == [2, 3]
     kept = b.freeze()
-    assert kept._edges.decompositions is not None and [d.index for d in kept.decompositions_of(1)] == [2, 3]
-    assert kept.decompositions_of(1)[0] is first
+    assert [d.index for d in kept.decompositions_of(1)] == [2, 3] and kept.decompositions_of(1)[0] is first

@@ -232,24 +232,8 @@ class _EdgeIndex:
     open: bool = True
     # execution constraints are symmetric and numerous: task -> partners, in the order added
     ec: dict[int, list[ExecutionPartner]] = field(default_factory=dict)
-    # by task; None once frozen when every task's decompositions are its AND successors, in order
-    decompositions: dict[int, list[DecompositionVertex]] | None = field(default_factory=dict)
-
-
-def _decompositions_are_and_successors(vertices: Sequence[Vertex], edges: _EdgeIndex) -> bool:
-    """Whether the decompositions of each task are its AND successors, in the same order, and
-    only tasks have decompositions: then a finished graph reads them from there instead of
-    keeping a list per task."""
-    by_task, ands = edges.decompositions, edges.by_kind[EdgeKind.AND]
-    if by_task is None or not all(0 <= t < len(vertices) and isinstance(vertices[t], TaskVertex) for t in by_task):
-        return False
-    for vertex in vertices:
-        if isinstance(vertex, TaskVertex):
-            listed = by_task.get(vertex.index, [])
-            successors = ands.get(vertex.index, [])
-            if len(listed) != len(successors) or any(d is not vertices[s] for d, s in zip(listed, successors)):
-                return False
-    return True
+    # by task, in order: the stages ask for a task's decompositions hundreds of thousands of times
+    decompositions: dict[int, list[DecompositionVertex]] = field(default_factory=dict)
 
 
 class _Adjacency:
@@ -313,12 +297,7 @@ class _Adjacency:
         return self._edges.ec.get(v, [])
 
     def decompositions_of(self, task: int) -> list[DecompositionVertex]:
-        by_task = self._edges.decompositions
-        if by_task is not None:
-            return by_task.get(task, [])
-        if not 0 <= task < len(self.vertices) or not isinstance(self.vertices[task], TaskVertex):
-            return []
-        return [self.decomposition(d) for d in self._edges.by_kind[EdgeKind.AND].get(task, ())]
+        return self._edges.decompositions.get(task, [])
 
     def decompositions(self) -> list[DecompositionVertex]:
         return [v for v in self.vertices if isinstance(v, DecompositionVertex)]
@@ -407,9 +386,8 @@ class TaskGraphBuilder(_Adjacency):
         self.vertices.append(vertex)
         self._edges.successors.append(_NO_SUCCESSORS)
         if isinstance(vertex, DecompositionVertex):
-            by_task = self._edges.decompositions
-            assert by_task is not None, "a frozen graph takes no vertices"
-            by_task.setdefault(vertex.parent, []).append(vertex)
+            assert self._edges.open, "a frozen graph takes no vertices"
+            self._edges.decompositions.setdefault(vertex.parent, []).append(vertex)
         return vertex
 
     def add_child(self, vertex: Vertex, kind: EdgeKind) -> Vertex:
@@ -424,7 +402,7 @@ class TaskGraphBuilder(_Adjacency):
         """:meth:`add_child` for each vertex of ``made`` with the edge kind beside it, in one
         loop: a stamped forAll copy's vertices (a large mission adds hundreds of thousands)."""
         vertices, edges = self.vertices, self._edges
-        assert edges.open and edges.decompositions is not None, "a frozen graph takes no vertices"
+        assert edges.open, "a frozen graph takes no vertices"
         successors, by_kind, by_task = edges.successors, edges.by_kind, edges.decompositions
         for vertex, kind in zip(made, kinds):
             assert vertex.index == len(vertices), (vertex.index, len(vertices))
@@ -464,9 +442,8 @@ class TaskGraphBuilder(_Adjacency):
     def replace(self, vertex: DecompositionVertex) -> None:
         """Put a changed decomposition vertex in place of the one with its index."""
         old = self.decomposition(vertex.index)
-        by_task = self._edges.decompositions
-        assert by_task is not None, "a frozen graph's vertices do not change"
-        siblings = by_task[old.parent]
+        assert self._edges.open, "a frozen graph's vertices do not change"
+        siblings = self._edges.decompositions[old.parent]
         siblings[siblings.index(old)] = vertex
         self.vertices[vertex.index] = vertex
 
@@ -539,8 +516,6 @@ class TaskGraphBuilder(_Adjacency):
             same = _same_kind(successors, edges.by_kind, v)
             if same is not None:
                 edges.successors[v] = same
-        if _decompositions_are_and_successors(self.vertices, edges):
-            edges.decompositions = None
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()},
                          stamped_copies=tuple(self.stamped_copies))
