@@ -56,14 +56,16 @@ def vertex_copier(cls: type, given: tuple[str, ...]) -> Callable[..., Any]:
     those fields set, slot by slot.  Trimming and stamping copy hundreds of thousands of
     vertices: ``dataclasses.replace`` re-runs the frozen ``__init__``, and a loop over the
     fields took three times as long as this straight-line function, generated once per class
-    and set of fields (as ``dataclasses`` generates ``__init__``)."""
+    and set of fields (as ``dataclasses`` generates ``__init__``).  Each field is set through
+    its slot's descriptor, as ``object.__setattr__`` would after looking the descriptor up."""
     copier = _VERTEX_COPIERS.get((cls, given))
     if copier is None:
         names = [f.name for f in dataclasses.fields(cls)]
         params = ("index", "parent", *given)
         assert set(params) <= set(names), (cls, given)
-        body = "".join(f"    set_(new, {n!r}, {n if n in params else 'vertex.' + n})\n" for n in names)
-        namespace: dict[str, Any] = {"new_": object.__new__, "set_": object.__setattr__, "cls": cls}
+        body = "".join(f"    set_{n}(new, {n if n in params else 'vertex.' + n})\n" for n in names)
+        namespace: dict[str, Any] = {"new_": object.__new__, "cls": cls}
+        namespace.update((f"set_{n}", getattr(cls, n).__set__) for n in names)  # the slots' descriptors
         exec(f"def copy(vertex, {', '.join(params)}):\n    new = new_(cls)\n{body}    return new\n", namespace)
         copier = _VERTEX_COPIERS[(cls, given)] = namespace["copy"]
     return copier
