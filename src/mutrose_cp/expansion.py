@@ -99,6 +99,7 @@ class _Walker:
         self.events: dict[int, str] = {}  # depth -> trigger event text
         self.instances: list[TaskInstance] = []
         self._robot_numbers: dict[str, RobotNumber] = {}  # by goal-model task, one record per value
+        self._task_shapes: dict[str, tuple[str, RobotNumber, dict[str, list[str]], bool]] = {}  # by goal-model task
         self.var_mapping: dict[str, list[tuple[str, str]]] = {}
         for vm in config.var_mapping:
             self.var_mapping.setdefault(vm.task_id, []).extend(vm.pairs)
@@ -121,10 +122,12 @@ class _Walker:
         return robots
 
     def _enter(self, depth: int) -> None:
-        for d in [d for d in self.counters if d >= depth]:
-            del self.counters[d]
-        for d in [d for d in self.events if d >= depth]:
-            del self.events[d]
+        """Forget the forAll indexes and trigger events of the levels at ``depth`` and below.
+        A level is only ever added below the deepest one kept (entering it forgets the rest),
+        so the tables are ordered by depth and the deepest are dropped from their end."""
+        for table in (self.counters, self.events):
+            while table and next(reversed(table)) >= depth:
+                table.popitem()
 
     def _bind(self, name: str, binding: Binding) -> None:
         self.bindings[name] = binding
@@ -247,30 +250,46 @@ class _Walker:
         return op
 
     def _task(self, node: GMNode) -> RatNode:
-        name = node.task_name or ""
-        if name not in self.domain.task_by_name:
-            raise MissionError(f"Could not find AT [{name}] in HDDL Domain definition.", self._where(node))
-        suffix = "".join(f"_{self.counters[d]}" for d in sorted(self.counters)) or "_1"
+        shape = self._task_shapes.get(node.id)
+        if shape is None:
+            shape = self._task_shapes[node.id] = self._task_shape(node)
+        name, robots, mapped, sequential = shape
+        # counters and events are ordered by depth (see _enter)
+        suffix = "".join(f"_{i}" for i in self.counters.values()) or "_1"
         inst_id = f"{node.id}{suffix}"
-        robots = self._robot_number(node, name)
+        bindings = self.bindings
         location: Value | None = None
-        mapping = self.var_mapping.get(node.id, [])
-        params: list[ParameterValue] = []
         variables: list[str] = []
         if node.location:
-            b = self.bindings.get(node.location)
+            b = bindings.get(node.location)
             if b is not None:
                 location = b.value
                 variables.append(node.location)
         for p in node.params:
-            if p not in self.bindings:
+            if p not in bindings:
                 raise MissionError(f"Could not find value for parameter [{p}] for task [{name}]", self._where(node))
             variables.append(p)
+        params: list[ParameterValue] = []
         for var in variables:
-            b = self.bindings[var]
-            for gm_var, hddl_var in mapping:
-                if gm_var == var:
-                    params.append(ParameterValue(hddl_var, b.value, b.type, var))
+            b = bindings[var]
+            for hddl_var in mapped.get(var, ()):
+                params.append(ParameterValue(hddl_var, b.value, b.type, var))
+        events = () if sequential else tuple(self.events.values())
+        inst = TaskInstance(inst_id, node.id, name, robots, location, tuple(params), events)
+        self.instances.append(inst)
+        return RatNode(TASK, inst_id, node.key, var_maps=self._snapshot())
+
+    def _task_shape(self, node: GMNode) -> tuple[str, RobotNumber, dict[str, list[str]], bool]:
+        """What every instance of a goal-model task shares, worked out at its first instance: the
+        HDDL task, the robot number, the HDDL parameters each goal-model variable maps to (in the
+        configuration's order), and whether it is a step of a sequence (which drops trigger
+        events).  A forAll makes thousands of instances of each."""
+        name = node.task_name or ""
+        if name not in self.domain.task_by_name:
+            raise MissionError(f"Could not find AT [{name}] in HDDL Domain definition.", self._where(node))
+        mapped: dict[str, list[str]] = {}
+        for gm_var, hddl_var in self.var_mapping.get(node.id, []):
+            mapped.setdefault(gm_var, []).append(hddl_var)
         parent = self.gm.node(node.parent) if node.parent else None
         sequential = (
             parent is not None
@@ -278,10 +297,7 @@ class _Walker:
             and parent.annotation.op == ";"
             and len(parent.children) > 1
         )
-        events = () if sequential else tuple(self.events[d] for d in sorted(self.events))
-        inst = TaskInstance(inst_id, node.id, name, robots, location, tuple(params), events)
-        self.instances.append(inst)
-        return RatNode(TASK, inst_id, node.key, var_maps=self._snapshot())
+        return name, self._robot_number(node, name), mapped, sequential
 
 
 def expand(gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge,
