@@ -71,16 +71,22 @@ class Component:
 
 def _components(enc: Encoding) -> list[Component]:
     bm = enc.model
-    find = VariableGroups(bm.records).find
-    groups: dict[int, Component] = {}
-    constant: list[Component] = []
+    groups_of = VariableGroups()
+    firsts: list[int] = []  # each record's first variable (0: none), read once
     for r in bm.records:
         vs = r.variables()
-        if not vs:  # a constant record: an empty clause or an exactly-one over nothing
+        firsts.append(vs[0] if vs else 0)
+        for v in vs[1:]:
+            groups_of.join(vs[0], v)
+    find = groups_of.find
+    groups: dict[int, Component] = {}
+    constant: list[Component] = []
+    for r, first in zip(bm.records, firsts):
+        if not first:  # a constant record: an empty clause or an exactly-one over nothing
             if not (isinstance(r, Exactly) and r.target is FALSE):
                 constant.append(Component([r], [], solutions=[], count=0))
             continue
-        root = find(vs[0])
+        root = find(first)
         group = groups.get(root)
         if group is None:
             group = groups[root] = Component([], [])
@@ -381,7 +387,9 @@ def _signature(bm: BoolModel, comp: Component) -> tuple[tuple[object, ...], list
 
     parts = []
     for r in comp.records:
-        ints = tuple((bm.ints[v].lo, bm.ints[v].hi) for v in r.variables() if v in bm.ints)
+        # only a numeric record has integer variables (their ranges belong to the key)
+        ints = (tuple((bm.ints[v].lo, bm.ints[v].hi) for v in r.variables() if v in bm.ints)
+                if isinstance(r, (ValueAfter, Compare)) else ())
         parts.append((r.kind, _canonical(r, lit, cid), ints))
     order = sorted(canon, key=canon.__getitem__)
     key = (tuple(parts), tuple(canon[v] for v in comp.choice_vars if v in canon))
