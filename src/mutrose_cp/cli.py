@@ -24,7 +24,7 @@ from .mission import Mission, find_mission_files, world_file
 from .option_types import count_option, seconds, work_units
 from .output_file import refuse_unsafe_outputs, written_together
 from .process import (FAILURES, Failure, command_settings, exit_process, failure_lines, failure_problems,
-                      failure_status, prepare_process, reader_gone)
+                      failure_status, keep_until_exit, prepare_process, process_ends_with_command, reader_gone)
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from .solve.optimize import CostModel
 
@@ -330,6 +330,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
                 result = mission.decompose(request, progress)
             with phase("writing the output"):
                 finish(result.decompositions, result.space_section(tg.decomposition_keys.__getitem__))
+    keep_until_exit(mission, model, result)
     total, note = result.total, _note(request, result)
     elapsed = time.perf_counter() - start
     kinds = constraints.count_by_kind()
@@ -597,6 +598,7 @@ def cmd_export_hddl(args: argparse.Namespace) -> int:
 def entry() -> None:
     """The console script (and ``python -m mutrose_cp``): run the command and exit with its
     status."""
+    process_ends_with_command()
     exit_process(main())
 
 

@@ -38,7 +38,7 @@ from .interrupt import phase, signal_handlers
 from .io.text import MB, input_limit
 from .output_file import refuse_unsafe_outputs
 from .process import (FAILURES, Failure, command_settings, exit_process, failure_lines, failure_status,
-                      prepare_process, reader_gone)
+                      keep_until_exit, prepare_process, process_ends_with_command, reader_gone)
 from .solve.decompose import Algorithm, DecompositionRequest
 
 if TYPE_CHECKING:  # imported when the command runs
@@ -159,6 +159,7 @@ def run(inv: Invocation, out: IO[str] | None = None) -> int:
     else:
         with phase("writing the output"):
             write_output(model, mission.output_path(), mission.config.output.file_type)
+    keep_until_exit(mission, model, result)
     return 0
 
 
@@ -228,6 +229,7 @@ def _command(argv: list[str]) -> int:
 
 def entry() -> None:
     """The ``mutrose`` console script."""
+    process_ends_with_command()
     exit_process(main())
 
 

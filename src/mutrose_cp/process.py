@@ -3,6 +3,7 @@ the settings a short-lived decomposition process runs best with, how a failure i
 how the process ends."""
 from __future__ import annotations
 
+import atexit
 import gc
 import os
 import signal
@@ -59,16 +60,50 @@ def usable_stderr() -> None:
         sys.stderr = open(os.devnull, "w")  # noqa: SIM115
 
 
+_kept: list[object] = []  # what a finished command leaves for the end of the process
+_ends_with_command = False  # set by the console scripts
+
+
+def process_ends_with_command() -> None:
+    """Say that the process ends when the command returns (the console scripts; not a program
+    that calls ``main``), so that :func:`keep_until_exit` may keep what the command made."""
+    global _ends_with_command
+    _ends_with_command = True
+
+
+def keep_until_exit(*objects: object) -> None:
+    """Keep a finished command's mission, Task Graph and decomposition space until the process
+    ends, when it ends with the command: freeing millions of objects one by one takes a
+    noticeable part of a large run (0.25 s of 5 s at 5000 vital-signs rooms), and the operating
+    system takes the memory back at once when the process exits.  The objects are also moved
+    out of the cyclic collector's reach, so that re-enabling it does not rescan them.  In a
+    program that calls ``main``, nothing is kept."""
+    if _ends_with_command:
+        _kept.extend(objects)
+        gc.freeze()
+
+
 def exit_process(code: int) -> None:
     """End the process with ``code``.  After an interrupt everything is cleaned up already, and
     the process ends at once: a CP-SAT search stopped midway can leave native state whose
-    teardown at interpreter exit aborts the process (status 134 instead of 130)."""
+    teardown at interpreter exit aborts the process (status 134 instead of 130).  When a
+    command kept its objects (:func:`keep_until_exit`), the process ends at once too, after the
+    streams are flushed and the exit handlers run, as the interpreter would; a stream that
+    cannot be flushed is left to the interpreter, which reports it as usual."""
     if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.flush()
             except (OSError, ValueError):
                 pass
+        os._exit(code)
+    if _kept:
+        try:
+            sys.stdout.flush()
+            sys.stderr.flush()
+        except (OSError, ValueError):
+            sys.exit(code)
+        atexit._run_exitfuncs()
         os._exit(code)
     sys.exit(code)
 
