@@ -535,13 +535,18 @@ class GroundPredicates:
 
 def _groundings(args: tuple[str, ...], binding: Mapping[str, Value]) -> list[tuple[str, ...]] | None:
     """Ground argument tuples (cartesian over collection values), or None if some is unbound."""
-    choices: list[tuple[str, ...]] = []
+    single: list[str] = []
+    values: list[Value] = []
     for a in args:
-        if a not in binding:
+        v = binding.get(a)
+        if v is None:
             return None
-        v = binding[a]
-        choices.append(v if isinstance(v, tuple) else (v,))
-    return [tuple(c) for c in itertools.product(*choices)]
+        values.append(v)
+        if isinstance(v, str):
+            single.append(v)
+    if len(single) == len(values):  # the common case, no collection: one grounding
+        return [tuple(single)]
+    return [tuple(c) for c in itertools.product(*(v if isinstance(v, tuple) else (v,) for v in values))]
 
 
 class _Grounder:

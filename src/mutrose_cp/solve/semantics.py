@@ -50,10 +50,15 @@ class Effects:
 
 def effects_of(dec: Decomposition) -> Effects:
     p = dec.predicates
-    facts = tuple(((e.predicate, e.args), e.positive) for e in p.effects if is_ground(e.args))
+    facts: list[tuple[AtomKey, bool]] = []
+    free: list[Literal] = []
+    for e in p.effects:  # one pass: the encoder asks this of every decomposition
+        if is_ground(e.args):
+            facts.append(((e.predicate, e.args), e.positive))
+        else:
+            free.append(e)
     numeric = tuple(((f, a), k, float(v) if isinstance(v, float) else v) for f, a, k, v in p.numeric_effects if is_ground(a))
-    free = tuple(e for e in p.effects if not is_ground(e.args))
-    return Effects(facts, numeric, free)
+    return Effects(tuple(facts), numeric, tuple(free))
 
 
 class State:
