@@ -126,26 +126,45 @@ done about it:
   one loop: Task Graph 1.75 s → 1.32 s. Whole run at 5000 rooms 8.2 s → 6.3 s (this machine,
   the same day), the same bytes. The peak memory measured is now the larger of one process's
   peak and the sampled total of the run's processes (`measure.py`).
-* **Still to do** for the time targets (5 s at 5000 rooms, 60 s at 50,000). At 5000 rooms the
-  run's critical path is one process: loading and the initial state 0.25 s, expansion 0.85 s,
-  Task Graph 1.3 s, constraints 0.2 s, encoding 1.7 s and space 0.9 s (each about 0.2 s slower
-  while the child writes: the pages the two processes share are copied on write), the
-  output's tail 0.3 s. Trimming the per-object work of these stages gave 5-10 % each (kept
-  where it did, dropped where it was noise: a specialised writer of the space section, exiting
-  without freeing the mission, grounding a stamped copy's decompositions by renaming its
-  source's grounded predicates instead of grounding its path).
+* **Fewer passes, and no teardown.** What was still done once per vertex and level, or per
+  question, and what the end of a run cost: the parallel conflicts of every parallel operator
+  (one per forAll copy, below the one over all copies) walked the operator's subtree; they are
+  now read from each atom's writers, whose decompositions are a range of vertex numbers per
+  operator (`semantics.ParallelConflicts`, checked against the walk on random missions). The
+  finished Task Graph answered a task's decompositions by building a list from its AND
+  successors, 200,000 times in the encoding; it keeps the lists (+9 MB at 5000 rooms). Record
+  labels, with a precondition's repr, were formatted even when not explaining. A copied
+  vertex's fields are set through their slots' descriptors; what every instance of a
+  goal-model task shares is worked out at its first; components are found reading each
+  record's variables once. Freeing the finished mission object by object took 0.25 s at 5000
+  rooms: the console scripts keep it and end the process at once, after flushing the streams
+  and running the exit handlers (`process.keep_until_exit`). Measured side by side on this
+  machine at 5000 rooms (fresh output, 5 runs each): 6.05 s → 5.1 s (expansion 0.86 s →
+  0.71 s, Task Graph 1.22 s → 1.04 s, encoding 1.52 s → 1.30 s, space 0.67 s → 0.60 s, one
+  process); 50,000 rooms 70.6 s / 3810 MB (the previous report: 82.9 s / 3756 MB, on the
+  machine it was made on). The same bytes.
+* **Still to do** for the 50,000-room target (60 s). At 50,000 rooms the run is one process (the
+  head of the output is not written beside the solve there: the second process would copy
+  about 2.3 GB of the pages it reads, past the 4 GB bound): loading 1.9 s, expansion 9.7 s,
+  Task Graph 16.3 s, constraints 2.0 s, encoding 16.3 s, space 6.1 s, output 21.1 s. Every
+  stage grows about 1.4 times faster than the mission from 5000 to 50,000 rooms (the objects
+  of a 3.8 GB process are far apart in memory); the space alone grows linearly.
 
-  What is left works copy by copy because the copies differ in the world: a vital-signs room's patients have other conditions, so the
-  encoding's constant folding and the space's components differ between rooms. But they fall
-  in few classes: the 5000 rooms of the benchmark world are 8 classes of copies equal up to
-  renaming in the world too (1334, 1333, 1000, 334, 333, 333, 333 and 1 rooms). The next step
-  is to encode one copy per class and replay its records for the others: the encoding's phases
-  (choices, task rules, conflicts and achieve conditions) each meet a copy's vertices as one
-  run (the mission queue of the vital-signs world does), so a copy's records are its source's with the variables created in that run renumbered
-  and the copy's choice variables put in, where the atoms it reads are its own (no writer or
-  reader outside it) with the same initial values; the chains of those atoms are cloned with
-  them, so that readers after the copies share them as now. The model, and so the output,
-  stays the same; the space's components of such copies can then be taken from their class's.
+  What is left works copy by copy because the copies differ in the world: a vital-signs room's
+  patients have other conditions, so the encoding's constant folding and the space's
+  components differ between rooms. But they fall in few classes: the 5000 rooms of the
+  benchmark world are 8 classes of copies equal up to renaming in the world too (1334, 1333,
+  1000, 334, 333, 333, 333 and 1 rooms). The next step is to encode one copy per class and
+  replay its records for the others: the encoding's phases (choices, task rules, conflicts and
+  achieve conditions) each meet a copy's vertices as one run (the mission queue of the
+  vital-signs world does), so a copy's records are its source's with the variables created in
+  that run renumbered and the copy's choice variables put in, where the atoms it reads are its
+  own (no writer or reader outside it) with the same initial values; the chains of those atoms
+  are cloned with them, so that readers after the copies share them as now. The variables'
+  names are part of the output (the layered section, the embedded model), and they hold the
+  copy's values and vertex numbers: they would be kept as a name and what to rename in it,
+  made when read. The model, and so the output, stays the same; the space's components of such
+  copies can then be taken from their class's.
 """
 
 
