@@ -281,3 +281,30 @@ def test_instances_of_a_task_share_its_inferred_robot_number(reference):
     assert any(len(numbers) > 1 for numbers in by_task.values())
     for name, numbers in by_task.items():
         assert all(n is numbers[0] for n in numbers) and numbers[0] == infer_robot_number(mission.domain, name)
+
+
+def test_a_query_that_reads_no_variable_is_run_once_and_one_that_does_per_element(tmp_path, monkeypatch):
+    """Vital signs with 6 occupied rooms: the sanitization room (G17) is the same record
+    whatever the room, so the forAll over rooms runs its query once; the patients of the room
+    (G5) are queried per room.  (The conformance and scaled tests check the outputs' bytes.)"""
+    import sys
+
+    from conftest import ROOT
+    from mutrose_cp import expansion
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from generate import generate
+
+    mission = Mission.load(*generate("vital-signs", 6, tmp_path))
+    asked: list[str] = []
+    run_select = expansion.run_select
+
+    def counted(select, world, bindings, goal_id):
+        asked.append(goal_id)
+        return run_select(select, world, bindings, goal_id)
+
+    monkeypatch.setattr(expansion, "run_select", counted)
+    rooms = sum(1 for inst in mission.expansion.instances if inst.gm_task == "AT1")  # EnterRoom, once per room
+    assert rooms > 1
+    assert asked.count("G5") == rooms  # each room's own patients
+    assert asked.count("G17") == 1  # asked in every room, run once

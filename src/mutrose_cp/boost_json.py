@@ -112,5 +112,6 @@ def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
         return
     fh.write("[\n" + pad + first)
     while chunk := list(itertools.islice(elements, 4096)):
-        fh.write(separator + separator.join(chunk))
+        fh.write(separator)  # apart from the chunk: prefixing it would copy a megabyte of text again
+        fh.write(separator.join(chunk))
     fh.write("\n" + " " * indent + "]")

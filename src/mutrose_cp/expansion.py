@@ -12,7 +12,7 @@ original does; nested operators of one annotation belong to the same goal and sh
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Mapping
+from typing import Callable, Iterator, Mapping
 
 from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
 from .errors import MissionError, Problem
@@ -29,7 +29,7 @@ from .model import (
     WorldKnowledge,
 )
 from .model.records import record_id
-from .query import run_select
+from .query import Element, run_select
 
 Value = str | tuple[str, ...]
 
@@ -85,6 +85,26 @@ def infer_robot_number(domain: Domain, task_name: str) -> RobotNumber:
     return RobotNumber(n, n, True)
 
 
+class _ReadBindings(Mapping[str, Binding]):
+    """The variable values, telling whether a query read any of them."""
+
+    def __init__(self, bindings: Mapping[str, Binding]) -> None:
+        self._bindings = bindings
+        self.read = False
+
+    def __getitem__(self, name: str) -> Binding:
+        self.read = True
+        return self._bindings[name]
+
+    def __iter__(self) -> Iterator[str]:
+        self.read = True
+        return iter(self._bindings)
+
+    def __len__(self) -> int:
+        self.read = True
+        return len(self._bindings)
+
+
 class _Walker:
     def __init__(self, gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge,
                  progress: Callable[[int, int], None] | None = None) -> None:
@@ -100,6 +120,7 @@ class _Walker:
         self.instances: list[TaskInstance] = []
         self._robot_numbers: dict[str, RobotNumber] = {}  # by goal-model task, one record per value
         self._task_shapes: dict[str, tuple[str, RobotNumber, dict[str, list[str]], bool]] = {}  # by goal-model task
+        self._static_queries: dict[str, list[Element]] = {}  # by query goal: the queries that read no variable
         self.var_mapping: dict[str, list[tuple[str, str]]] = {}
         for vm in config.var_mapping:
             self.var_mapping.setdefault(vm.task_id, []).extend(vm.pairs)
@@ -156,11 +177,16 @@ class _Walker:
         assert node.query is not None
         if not node.controls:
             raise MissionError(f"No controlled variable was declared for Query goal [{node.id}]", self._where(node))
-        try:
-            records = run_select(node.query, self.world, self.bindings, node.id)
-        except MissionError as err:  # locate world-dependent query problems in the goal model
-            raise MissionError([Problem(self._where(node), p.message) if p.where in ("", node.id) else p
-                                for p in err.problems]) from None
+        records = self._static_queries.get(node.id)
+        if records is None:
+            read = _ReadBindings(self.bindings)
+            try:
+                records = run_select(node.query, self.world, read, node.id)
+            except MissionError as err:  # locate world-dependent query problems in the goal model
+                raise MissionError([Problem(self._where(node), p.message) if p.where in ("", node.id) else p
+                                    for p in err.problems]) from None
+            if not read.read:  # the same records every time: a forAll asks it once per element
+                self._static_queries[node.id] = records
         var = node.controls[0]
         ids = tuple(record_id(r, self.world.unique_id) or "" for r in records)
         if var.is_collection:
