@@ -164,7 +164,14 @@ done about it:
   names are part of the output (the layered section, the embedded model), and they hold the
   copy's values and vertex numbers: they would be kept as a name and what to rename in it,
   made when read. The model, and so the output, stays the same; the space's components of such
-  copies can then be taken from their class's.
+  copies can then be taken from their class's. Finding the classes must itself be cheap: a
+  first try that read, for every copy, what its encoding reads (its atoms in order, their
+  initial values, whether another copy writes or reads them) took 1.15 s at 5000 rooms, as
+  long as the encoding it would spare. A copy's atoms are its source copy's renamed with the
+  copy's values (as the output's copy blocks rename them), so the class can come from the
+  stamping: the source's atoms once, then per copy only the initial values of the renamed
+  atoms and their writers. Even so, at 50,000 rooms this would spare about 9 of the 16 s of
+  the encoding; the 60 s target also needs the Task Graph or the output to take less.
 """
 
 
