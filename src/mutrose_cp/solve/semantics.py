@@ -467,7 +467,9 @@ class EffectScopes:
                 own = tg.decompositions_of(v)
                 last = own[-1].index if own else -1
             else:
-                last = max((self.last_below(c) for c in tg.children(v)), default=-1)
+                last = -1
+                for c in tg.children(v):  # a loop, not max() over a generator: deep graphs recurse
+                    last = max(last, self.last_below(c))  # here without the C stack
             self._last[v] = last
         return last
 
