@@ -135,8 +135,9 @@ done about it:
   successors, 200,000 times in the encoding; it keeps the lists (+9 MB at 5000 rooms). Record
   labels, with a precondition's repr, were formatted even when not explaining. A copied
   vertex's fields are set through their slots' descriptors; what every instance of a
-  goal-model task shares is worked out at its first; components are found reading each
-  record's variables once. Freeing the finished mission object by object took 0.25 s at 5000
+  goal-model task shares is worked out at its first; a query that reads no variable is run
+  once for all the elements of a forAll; components are found reading each record's
+  variables once. Freeing the finished mission object by object took 0.25 s at 5000
   rooms: the console scripts keep it and end the process at once, after flushing the streams
   and running the exit handlers (`process.keep_until_exit`). Measured side by side on this
   machine at 5000 rooms (fresh output, 5 runs each): 6.05 s → 5.1 s (expansion 0.86 s →
@@ -159,8 +160,8 @@ done about it:
   achieve conditions) each meet a copy's vertices as one run (the mission queue of the
   vital-signs world does), so a copy's records are its source's with the variables created in
   that run renumbered and the copy's choice variables put in, where the atoms it reads are its
-  own (no writer or reader outside it) with the same initial values; the chains of those atoms
-  are cloned with them, so that readers after the copies share them as now. The variables'
+  own (no writer or reader outside it) with the same initial values; those atoms' chains need
+  no copy, since only the copy's own rules, all replayed, read them. The variables'
   names are part of the output (the layered section, the embedded model), and they hold the
   copy's values and vertex numbers: they would be kept as a name and what to rename in it,
   made when read. The model, and so the output, stays the same; the space's components of such
