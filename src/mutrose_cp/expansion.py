@@ -12,7 +12,7 @@ original does; nested operators of one annotation belong to the same goal and sh
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Iterator, Mapping
+from typing import Callable, Iterator, Mapping, NamedTuple
 
 from .annotation_tree import GOAL, MEANSEND, OPERATOR, TASK, RatNode
 from .errors import MissionError, Problem
@@ -85,6 +85,15 @@ def infer_robot_number(domain: Domain, task_name: str) -> RobotNumber:
     return RobotNumber(n, n, True)
 
 
+class _TaskShape(NamedTuple):
+    """What every instance of a goal-model task shares (:meth:`_Walker._task_shape`)."""
+
+    name: str  # the HDDL abstract task
+    robots: RobotNumber
+    mapped: dict[str, list[str]]  # goal-model variable -> the HDDL parameters it maps to
+    sequential: bool  # a step of a sequence: it takes no trigger events
+
+
 class _ReadBindings(Mapping[str, Binding]):
     """The variable values, telling whether a query read any of them."""
 
@@ -119,7 +128,7 @@ class _Walker:
         self.events: dict[int, str] = {}  # depth -> trigger event text
         self.instances: list[TaskInstance] = []
         self._robot_numbers: dict[str, RobotNumber] = {}  # by goal-model task, one record per value
-        self._task_shapes: dict[str, tuple[str, RobotNumber, dict[str, list[str]], bool]] = {}  # by goal-model task
+        self._task_shapes: dict[str, _TaskShape] = {}  # by goal-model task
         self._static_queries: dict[str, list[Element]] = {}  # by query goal: the queries that read no variable
         self.var_mapping: dict[str, list[tuple[str, str]]] = {}
         for vm in config.var_mapping:
@@ -305,7 +314,7 @@ class _Walker:
         self.instances.append(inst)
         return RatNode(TASK, inst_id, node.key, var_maps=self._snapshot())
 
-    def _task_shape(self, node: GMNode) -> tuple[str, RobotNumber, dict[str, list[str]], bool]:
+    def _task_shape(self, node: GMNode) -> _TaskShape:
         """What every instance of a goal-model task shares, worked out at its first instance: the
         HDDL task, the robot number, the HDDL parameters each goal-model variable maps to (in the
         configuration's order), and whether it is a step of a sequence (which drops trigger
@@ -323,7 +332,7 @@ class _Walker:
             and parent.annotation.op == ";"
             and len(parent.children) > 1
         )
-        return name, self._robot_number(node, name), mapped, sequential
+        return _TaskShape(name, self._robot_number(node, name), mapped, sequential)
 
 
 def expand(gm: GoalModel, domain: Domain, config: Configuration, world: WorldKnowledge,

@@ -147,9 +147,12 @@ class VariableGroups:
     def __init__(self, records: Iterable[Record] = ()) -> None:
         self._parent: dict[int, int] = {}
         for r in records:
-            vs = r.variables()
-            for v in vs[1:]:
-                self.join(vs[0], v)
+            self.join_all(r.variables())
+
+    def join_all(self, variables: Sequence[int]) -> None:
+        """Put ``variables`` in one group."""
+        for v in variables[1:]:
+            self.join(variables[0], v)
 
     def find(self, v: int) -> int:
         parent = self._parent

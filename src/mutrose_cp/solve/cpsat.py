@@ -76,8 +76,7 @@ def _components(enc: Encoding) -> list[Component]:
     for r in bm.records:
         vs = r.variables()
         firsts.append(vs[0] if vs else 0)
-        for v in vs[1:]:
-            groups_of.join(vs[0], v)
+        groups_of.join_all(vs)
     find = groups_of.find
     groups: dict[int, Component] = {}
     constant: list[Component] = []

@@ -285,9 +285,7 @@ def _choice_groups(records: Sequence[Record], defined: set[int]) -> dict[int, in
     groups = VariableGroups()
     for r in records:
         if isinstance(r, Exactly):
-            lits = [abs(l) for l in r.lits if isinstance(l, int) and abs(l) not in defined]
-            for v in lits[1:]:
-                groups.join(lits[0], v)
+            groups.join_all([abs(l) for l in r.lits if isinstance(l, int) and abs(l) not in defined])
     free = {v for r in records for v in r.variables() if v not in defined}
     latest: dict[int, int] = {}
     for v in free:
