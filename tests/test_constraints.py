@@ -181,6 +181,77 @@ def test_a_list_of_constraints_reads_as_the_rows_it_would_be_stored_as():
     assert [constraint_of_row(row) for row in constraint_rows(given)] == given
 
 
+def _stored_with_moved_runs():
+    """A list of two stored rows, then moved runs of another list (as a stamped mission's
+    constraints are made), and the constraints it stands for."""
+    from mutrose_cp.constraints import EC, FB, SEQ, Constraint, Constraints
+
+    source = Constraints([Constraint(SEQ, 3, 7), Constraint(FB, 7, 2), Constraint(EC, 4, 9, False, True),
+                          Constraint(EC, 9, 4, True, False)])
+    stored = Constraints([Constraint(SEQ, 0, 1), Constraint(EC, 1, 0, False, False)])
+    for lo, hi, shift in ((0, 4, 0), (1, 3, 10), (0, 2, 20), (2, 2, 5)):
+        stored.extend_shifted(source, lo, hi, shift)
+    moved = [c._replace(first=c.first + shift, second=c.second + shift)
+             for lo, hi, shift in ((0, 4, 0), (1, 3, 10), (0, 2, 20)) for c in list(source)[lo:hi]]
+    return stored, [Constraint(SEQ, 0, 1), Constraint(EC, 1, 0, False, False), *moved]
+
+
+def test_moved_runs_are_counted_and_read_as_the_rows_they_stand_for():
+    """Moved runs (a stamped copy's constraints) are kept as runs until something reads the
+    rows: the length, the counts by kind and the runs come without storing them; every other
+    read, and every append, stores them first, in their place."""
+    from mutrose_cp.constraints import EC, SEQ, Constraint
+
+    stored, expected = _stored_with_moved_runs()
+    assert len(stored) == len(expected) == 10
+    assert stored.count_by_kind() == {"SEQ": 3, "FB": 3, "EC": 4}
+    assert [(run.lo, run.hi, run.shift) for run in stored.runs()] == [(0, 2, 0), (0, 4, 0), (1, 3, 10), (0, 2, 20)]
+    assert list(stored) == expected and stored[5] == expected[5]
+    stored, _ = _stored_with_moved_runs()
+    assert [row[1:3] for row in stored.rows(4, 7)] == [(c.first, c.second) for c in expected[4:7]]
+    stored, _ = _stored_with_moved_runs()
+    runs = []
+    for run in stored.runs():  # the runs as they were when asked for, though reading stores them
+        runs.append([row[1:3] for row in run.rows.rows(run.lo, run.hi)])
+        assert len(list(stored.rows())) == 10
+    assert len(runs) == 4 and runs[2] == [(7, 2), (4, 9)]
+    stored, _ = _stored_with_moved_runs()
+    stored.append_row((0, 50, 51, 3))
+    stored.add_all_pairs(EC, [60], [61], False, True)
+    assert list(stored) == [*expected, Constraint(SEQ, 50, 51), Constraint(EC, 60, 61, False, True)]
+    assert [(run.lo, run.hi, run.shift) for run in stored.runs()] == [(0, 12, 0)]
+
+
+def test_the_constraints_section_is_each_constraint_formatted_in_order(monkeypatch):
+    """The constraints' text is filled in templates, a run at a time (a moved run fills its
+    source's template with its own keys): it is each constraint's own text, in order, and the
+    streamed list holds them whatever the size of its writes."""
+    import io
+
+    from mutrose_cp import boost_json, constraint_texts as texts
+
+    def one_by_one(constraints):
+        return [(lambda head, tail: head + f"t{c.first}" + texts._BETWEEN_KEYS + f"t{c.second}" + tail)(
+            *texts.constraint_text_parts(c)) for c in constraints]
+
+    key = "t{}".format
+    stored, expected = _stored_with_moved_runs()
+    monkeypatch.setattr(texts, "RUN_ROWS", 3)  # the stored run is cut in templates of 3 rows
+    made = list(texts.constraint_texts(stored, key))
+    assert len(made) == 5 and texts.SEPARATOR.join(made) == texts.SEPARATOR.join(one_by_one(expected))
+    assert len(list(stored.runs())) == 4  # the moved runs were written without being stored
+    assert texts.SEPARATOR.join(texts.constraint_texts(expected, key)) == texts.SEPARATOR.join(one_by_one(expected))
+    assert '"group": "False",\n            "divisible": "True"' in made[1]
+    for size in (1, 100, 1 << 20):
+        monkeypatch.setattr(boost_json, "_WRITE_SIZE", size)
+        fh = io.StringIO()
+        boost_json._write_list(fh, texts.constraint_texts(stored, key), 4)
+        assert fh.getvalue() == "[\n        " + ",\n        ".join(one_by_one(expected)) + "\n    ]"
+    fh = io.StringIO()
+    boost_json._write_list(fh, texts.constraint_texts([], key), 4)
+    assert fh.getvalue() == '""'
+
+
 def test_implied_constraints_are_found_through_short_and_long_neighbour_lists():
     """Dropping implied constraints asks whether two neighbour lists share a vertex: scanned when
     both are short, through a set when they are long; absent lists share nothing."""

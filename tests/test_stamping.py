@@ -22,6 +22,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, event, given, seed, settings
 
+from mutrose_cp.constraint_texts import SEPARATOR, constraint_texts
 from mutrose_cp.constraints import _stamped, generate_constraints
 from mutrose_cp.mission import Mission, find_mission_files
 from mutrose_cp.model.task_graph import TaskGraph
@@ -61,7 +62,11 @@ def _agree(m: Mission) -> bool:
     stamped = stamped_task_graph(*_stages(m))
     if stamped is not None:
         _same_graph(full, stamped)
-        assert generate_constraints(stamped) == generate_constraints(full)
+        made, built = generate_constraints(stamped), generate_constraints(full)
+        assert made.count_by_kind() == built.count_by_kind() and len(made) == len(built)
+        key = full.decomposition_keys.__getitem__
+        assert SEPARATOR.join(constraint_texts(made, key)) == SEPARATOR.join(constraint_texts(built, key))
+        assert made == built
     _same_graph(full, build_task_graph(*_stages(m)))
     return stamped is not None
 

@@ -5,9 +5,10 @@ editor plug-in, a mission controller) parse this dialect, so every writer of it 
 from __future__ import annotations
 
 import functools
-import itertools
 import re
 from typing import IO, Callable, Iterable, Mapping, Sequence, TypeAlias
+
+_WRITE_SIZE = 1 << 20  # characters written at once by the streamed lists
 
 # a JSON value as PropertyTree holds it: every scalar is a string
 Tree: TypeAlias = "str | Sequence[Tree] | Mapping[str, Tree]"
@@ -101,8 +102,9 @@ def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
 
 
 def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
-    """A JSON list whose elements are already serialized at ``indent + 4``; streamed, a few
-    thousand elements per write (a large output lists a million constraints)."""
+    """A JSON list whose elements are already serialized at ``indent + 4``; an item holds one
+    or more of them, joined by ``,\n`` and the indentation.  Streamed, about a megabyte per
+    write (a large output lists ten million constraints)."""
     pad = " " * (indent + 4)
     separator = ",\n" + pad
     elements = iter(items)
@@ -110,8 +112,14 @@ def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
     if first is None:
         fh.write('""')
         return
-    fh.write("[\n" + pad + first)
-    while chunk := list(itertools.islice(elements, 4096)):
-        fh.write(separator)  # apart from the chunk: prefixing it would copy a megabyte of text again
-        fh.write(separator.join(chunk))
+    fh.write("[\n" + pad)
+    group, size = [first], len(first)
+    for text in elements:
+        if size >= _WRITE_SIZE:
+            fh.write(separator.join(group))
+            fh.write(separator)  # apart from the group: adding it would copy a megabyte of text again
+            group, size = [], 0
+        group.append(text)
+        size += len(text)
+    fh.write(separator.join(group))
     fh.write("\n" + " " * indent + "]")

@@ -39,6 +39,16 @@ class Constraint(NamedTuple):
     divisible: bool = True
 
 
+class Run(NamedTuple):
+    """Rows ``lo .. hi - 1`` of ``rows`` with their vertices moved by ``shift``
+    (:meth:`Constraints.runs`)."""
+
+    rows: "Constraints"
+    lo: int
+    hi: int
+    shift: int
+
+
 _KINDS = tuple(ConstraintKind)  # a stored kind is its position here
 _KIND_CODE = {kind: code for code, kind in enumerate(_KINDS)}
 _GROUP = tuple(flag & 1 == 1 for flag in range(4))  # by the stored flags
@@ -52,13 +62,16 @@ class Constraints(Sequence[Constraint]):
     10 MB.  Reading it (by index or by iterating) gives :class:`Constraint` tuples, made when
     read; it equals any sequence of the same constraints, a list included."""
 
-    __slots__ = ("_kinds", "_firsts", "_seconds", "_flags")
+    __slots__ = ("_kinds", "_firsts", "_seconds", "_flags", "_pending", "_pending_rows")
 
     def __init__(self, constraints: Iterable[Constraint] = ()) -> None:
         self._kinds = bytearray()
         self._firsts = array("i")  # vertex indices
         self._seconds = array("i")
         self._flags = bytearray()  # group | divisible << 1
+        # runs of another list's rows, moved, that follow the stored ones (:meth:`extend_shifted`)
+        self._pending: list[Run] = []
+        self._pending_rows = 0
         self.extend(constraints)
 
     def append(self, c: Constraint) -> None:
@@ -73,6 +86,7 @@ class Constraints(Sequence[Constraint]):
         """``kind`` between every vertex of ``firsts`` and every vertex of ``seconds``, by first
         vertex and then second (a task pair's constraints, expanded over their decompositions)."""
         code, flag = _KIND_CODE[kind], group | divisible << 1
+        self._settle()
         if len(firsts) * len(seconds) <= _FEW_PAIRS:  # most task pairs: one column entry at a time
             for first in firsts:
                 for second in seconds:
@@ -88,13 +102,29 @@ class Constraints(Sequence[Constraint]):
             self._seconds.extend(array("i", seconds))
         self._flags.extend(bytes([flag]) * n)
 
-    def rows(self) -> Iterator[tuple[int, int, int, int]]:
-        """The stored columns row by row (kind code, first, second, flags): the generator's own
-        passes over a million constraints read them without making the tuples."""
-        return zip(self._kinds, self._firsts, self._seconds, self._flags)
+    def rows(self, lo: int = 0, hi: int | None = None) -> Iterator[tuple[int, int, int, int]]:
+        """The stored columns row by row (kind code, first, second, flags), from ``lo`` to
+        ``hi``: the generator's own passes over a million constraints read them without making
+        the tuples.  Pending runs are stored first, unless the rows asked for are all stored."""
+        if hi is None or hi > len(self._kinds):
+            self._settle()
+        if lo == 0 and hi is None:
+            return zip(self._kinds, self._firsts, self._seconds, self._flags)
+        return zip(self._kinds[lo:hi], self._firsts[lo:hi], self._seconds[lo:hi], self._flags[lo:hi])
+
+    def runs(self) -> Iterator[Run]:
+        """The list as runs of stored rows, in order: rows ``lo .. hi - 1`` of a list with their
+        vertices moved by ``shift``.  A stamped forAll copy's run is its source's rows, moved:
+        the output formats such a run once and fills in each copy's keys, and nothing needs the
+        moved rows stored."""
+        pending = tuple(self._pending)  # as they are now: reading the rows of one may store them
+        if self._kinds:
+            yield Run(self, 0, len(self._kinds), 0)
+        yield from pending
 
     def append_row(self, row: tuple[int, int, int, int]) -> None:
         """Append a row as :meth:`rows` gives it."""
+        self._settle()
         code, first, second, flag = row
         self._kinds.append(code)
         self._firsts.append(first)
@@ -103,18 +133,35 @@ class Constraints(Sequence[Constraint]):
 
     def extend_shifted(self, other: "Constraints", lo: int, hi: int, shift: int) -> None:
         """Append rows ``lo .. hi - 1`` of ``other`` with their vertices moved by ``shift``: a
-        stamped forAll copy's constraints, from those of the copy it was stamped from."""
-        self._kinds += other._kinds[lo:hi]
-        self._firsts.extend(map(shift.__add__, other._firsts[lo:hi]))
-        self._seconds.extend(map(shift.__add__, other._seconds[lo:hi]))
-        self._flags += other._flags[lo:hi]
+        stamped forAll copy's constraints, from those of the copy it was stamped from.  They
+        are stored when first read (:meth:`runs` gives them as they are): at 50,000 vital-signs
+        rooms, moving eleven million rows one by one took two seconds that the output does not
+        need."""
+        if hi > lo:
+            other._settle()
+            self._pending.append(Run(other, lo, hi, shift))
+            self._pending_rows += hi - lo
+
+    def _settle(self) -> None:
+        """Store the pending runs (:meth:`extend_shifted`)."""
+        for other, lo, hi, shift in self._pending:
+            self._kinds += other._kinds[lo:hi]
+            self._firsts.extend(map(shift.__add__, other._firsts[lo:hi]) if shift else other._firsts[lo:hi])
+            self._seconds.extend(map(shift.__add__, other._seconds[lo:hi]) if shift else other._seconds[lo:hi])
+            self._flags += other._flags[lo:hi]
+        self._pending.clear()
+        self._pending_rows = 0
 
     def __len__(self) -> int:
-        return len(self._kinds)
+        return len(self._kinds) + self._pending_rows
 
     def count_by_kind(self) -> Counter[str]:
-        """How many constraints there are of each kind present (a summary's counts)."""
-        return Counter({str(_KINDS[code]): n for code, n in Counter(self._kinds).items()})
+        """How many constraints there are of each kind present (a summary's counts); moving a
+        run does not change its kinds, so the pending runs are counted where they are."""
+        counts = Counter(self._kinds)
+        for other, lo, hi, _ in self._pending:
+            counts.update(other._kinds[lo:hi])
+        return Counter({str(_KINDS[code]): n for code, n in counts.items()})
 
     @overload
     def __getitem__(self, i: int) -> Constraint: ...
@@ -123,18 +170,22 @@ class Constraints(Sequence[Constraint]):
     def __getitem__(self, i: slice) -> list[Constraint]: ...
 
     def __getitem__(self, i: int | slice) -> Constraint | list[Constraint]:
+        self._settle()
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(len(self)))]
         return constraint_of_row((self._kinds[i], self._firsts[i], self._seconds[i], self._flags[i]))
 
     def __iter__(self) -> Iterator[Constraint]:
         # the tuples are made by tuple.__new__ from zipped columns: no Python call per constraint
+        self._settle()
         columns = zip(map(_KINDS.__getitem__, self._kinds), self._firsts, self._seconds,
                       map(_GROUP.__getitem__, self._flags), map(_DIVISIBLE.__getitem__, self._flags))
         return map(tuple.__new__, itertools.repeat(Constraint), columns)
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, Constraints):
+            self._settle()
+            other._settle()
             return (self._kinds == other._kinds and self._firsts == other._firsts
                     and self._seconds == other._seconds and self._flags == other._flags)
         if isinstance(other, Sequence) and not isinstance(other, (str, bytes)):

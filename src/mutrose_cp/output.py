@@ -12,7 +12,8 @@ from dataclasses import dataclass
 from typing import IO, TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
 
 from .boost_json import Tree, _write_list, boost_json, write_boost_json
-from .constraints import EC, SEQ, Constraint, constraint_of_row, constraint_rows
+from .constraint_texts import constraint_texts
+from .constraints import EC, SEQ, Constraint
 from .copy_blocks import CopyBlocks
 from .entry_templates import EntryTemplates, actions_tree, argument_values, pred_tree, robots_tree
 from .errors import MissionError
@@ -131,15 +132,6 @@ class OutputModel:
     space: Mapping[str, Any] | None = None  # optional mission_decomposition_space section
 
 
-def _constraint_text_parts(c: Constraint) -> tuple[str, str]:
-    """The JSON text of a constraint of ``c``'s kind and flags before its first key and after its
-    second (FB is written as EC without flags, as the original does)."""
-    head = f'{{\n            "type": "{"SEQ" if c.kind == SEQ else "EC"}",\n            "task_instances": {{\n                "t0": "'
-    if c.kind == EC:
-        return head, f'"\n            }},\n            "group": "{c.group}",\n            "divisible": "{c.divisible}"\n        }}'
-    return head, '"\n            }\n        }'
-
-
 class OutputBuilder:
     def __init__(self, model: OutputModel) -> None:
         self.m = model
@@ -171,18 +163,6 @@ class OutputBuilder:
             "divisible": str(divisible),
         }
 
-    def _constraint_texts(self) -> Iterator[str]:
-        """Each constraint at indent 8 (there can be a million): the text around its two keys is
-        made once per kind and flags, and the constraints are read as stored rows."""
-        key = self.key
-        around: dict[tuple[int, int], tuple[str, str]] = {}
-        for row in constraint_rows(self.m.constraints):
-            code, first, second, flags = row
-            parts = around.get((code, flags))
-            if parts is None:
-                parts = around[(code, flags)] = _constraint_text_parts(constraint_of_row(row))
-            yield parts[0] + key[first] + '",\n                "t1": "' + key[second] + parts[1]
-
     def write_json(self, fh: IO[str]) -> None:
         """Stream the JSON document (mission decompositions may be many)."""
         self.write_json_head(fh)
@@ -213,7 +193,7 @@ class OutputBuilder:
         else:
             fh.write('""')
         fh.write(",\n    \"constraints\": ")
-        _write_list(fh, self._constraint_texts(), 4)
+        _write_list(fh, constraint_texts(self.m.constraints, self.key.__getitem__), 4)
 
     def write_json_tail(self, fh: IO[str]) -> None:
         """The rest of the document: the mission decompositions and the decomposition space."""
