@@ -377,7 +377,7 @@ def write_output(model: OutputModel, path: str | os.PathLike[str], file_type: st
     """Write the output file atomically in ``json`` or ``xml``; JSON in the Boost style the
     original's readers expect, or in standard JSON (``standard_json.py``)."""
     builder = OutputBuilder(model)
-    with atomic_writer(path) as fh:
+    with atomic_writer(path, behind=True) as fh:
         if file_type == "xml":
             builder.write_xml(fh)
         elif json_style == "standard":

@@ -21,9 +21,10 @@ import sys
 import tempfile
 from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
-from typing import IO, Any, Iterable, Iterator, Literal, overload
+from typing import IO, Any, Iterable, Iterator, Literal, cast, overload
 
 from .errors import MissionError
+from .write_behind import WriteBehind
 
 STDOUT = "-"
 
@@ -41,16 +42,21 @@ def write_failure(path: str | os.PathLike[str], err: OSError) -> MissionError:
 
 
 @overload
-def atomic_writer(path: str | os.PathLike[str], mode: Literal["w"] = "w") -> AbstractContextManager[IO[str]]: ...
+def atomic_writer(path: str | os.PathLike[str], mode: Literal["w"] = "w", *,
+                  behind: bool = False) -> AbstractContextManager[IO[str]]: ...
 
 
 @overload
-def atomic_writer(path: str | os.PathLike[str], mode: Literal["wb"]) -> AbstractContextManager[IO[bytes]]: ...
+def atomic_writer(path: str | os.PathLike[str], mode: Literal["wb"], *,
+                  behind: bool = False) -> AbstractContextManager[IO[bytes]]: ...
 
 
 @contextmanager
-def atomic_writer(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO[Any]]:
-    """A file object for the output at ``path`` (see the module docstring)."""
+def atomic_writer(path: str | os.PathLike[str], mode: str = "w", *, behind: bool = False) -> Iterator[IO[Any]]:
+    """A file object for the output at ``path`` (see the module docstring).  With ``behind``,
+    a replaced file's text is written by a second thread while the caller goes on formatting
+    (:mod:`mutrose_cp.write_behind`): for the large outputs, written from one thread and not
+    across a fork."""
     if os.fspath(path) == STDOUT:
         with _standard_output(mode) as stream:
             yield stream
@@ -61,7 +67,7 @@ def atomic_writer(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO[
         with _written_through(target, path, mode) as fh:
             yield fh
         return
-    with _replaced(target, path, mode, existing) as fh:
+    with _replaced(target, path, mode, existing, behind and "b" not in mode) as fh:
         yield fh
 
 
@@ -114,10 +120,10 @@ def _written_through(target: Path, path: str | os.PathLike[str], mode: str) -> I
 
 @contextmanager
 def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
-              existing: os.stat_result | None) -> Iterator[IO[Any]]:
+              existing: os.stat_result | None, behind: bool = False) -> Iterator[IO[Any]]:
     """A temporary file beside ``target``, renamed over it only once the whole text is written;
     on any failure (or interruption) the temporary file is removed and ``target`` is left as
-    it was."""
+    it was.  ``behind``: written by a second thread (:class:`WriteBehind`)."""
     encoding, newline = _text_options(mode)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
@@ -126,8 +132,12 @@ def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
         raise write_failure(path, err) from None
     try:
         os.fchmod(fd, stat.S_IMODE(existing.st_mode) if existing is not None else 0o666 & ~_umask())
-        with os.fdopen(fd, mode, encoding=encoding, newline=newline) as fh:
-            yield fh
+        if behind:
+            with _written_behind(fd) as fh:
+                yield fh
+        else:
+            with os.fdopen(fd, mode, encoding=encoding, newline=newline) as fh:
+                yield fh
         os.replace(tmp, target)
     except BaseException as exc:
         try:
@@ -137,6 +147,19 @@ def _replaced(target: Path, path: str | os.PathLike[str], mode: str,
         if isinstance(exc, OSError):
             raise write_failure(path, exc) from None
         raise
+
+
+@contextmanager
+def _written_behind(fd: int) -> Iterator[IO[str]]:
+    """``fd`` as a :class:`WriteBehind`: closed (all written) when the block ends, abandoned
+    (the rest dropped) when it fails."""
+    fh = WriteBehind(fd)
+    try:
+        yield cast(IO[str], fh)  # a TextIOBase: what the writers use of IO[str]
+    except BaseException:
+        fh.abandon()
+        raise
+    fh.close()
 
 
 Pathlike = str | os.PathLike[str]
