@@ -85,6 +85,11 @@ class DecompositionPath:
         return tuple(s for s in self.steps if not s.pseudo)
 
     @cached_property
+    def bare(self) -> bool:
+        """Whether no step has a condition or an effect."""
+        return not any(s.preconditions or s.effects or s.numeric_effects for s in self.steps)
+
+    @cached_property
     def constants(self) -> frozenset[str]:
         """The constants the steps name (arguments that are no variables): grounding and
         printing keep them as themselves, whatever the instance's values."""
@@ -646,8 +651,15 @@ class _Grounder:
         )
 
 
+_NO_PREDICATES = GroundPredicates((), (), ())
+
+
 def ground_path(path: DecompositionPath, binding: Mapping[str, Value]) -> GroundPredicates:
-    """Instantiate a path with an instance's parameter values (root parameter -> value)."""
+    """Instantiate a path with an instance's parameter values (root parameter -> value).  A
+    path without conditions or effects (a third of vital signs' 950,000 decompositions at
+    50,000 rooms) shares one empty record: it is frozen."""
+    if path.bare:
+        return _NO_PREDICATES
     grounder = _Grounder(binding)
     for step in path.steps:
         grounder.step(step)
