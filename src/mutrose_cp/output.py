@@ -140,7 +140,10 @@ class OutputBuilder:
         self.printer = PredicatePrinter(model.domain, model.config, model.state)
 
     def actions(self) -> list[tuple[str, tuple[str, ...]]]:
-        names = sorted({s.name for d in self.decs for s in d.decomposition.path.actions})
+        """Every action some decomposition uses, by name, with its capabilities; each path is
+        read once (the decompositions of a forAll's copies share a few paths)."""
+        paths = {id(d.decomposition.path): d.decomposition.path for d in self.decs}
+        names = sorted({s.name for path in paths.values() for s in path.actions})
         return [(n, self.m.domain.action_by_name[n].capabilities) for n in names]
 
     def task_entry(self, dec: Decomposition, group: bool, divisible: bool) -> dict[str, Tree]:
@@ -183,7 +186,8 @@ class OutputBuilder:
                 filled = blocks.entries(i)
                 if filled is not None:  # a stamped copy's entries, filled in its source's
                     text, i = filled
-                    fh.write(text + (",\n" if i <= last else "\n"))
+                    fh.write(text)  # apart from its ending: adding it would copy the copy's text again
+                    fh.write(",\n" if i <= last else "\n")
                     continue
                 d = self.decs[i]
                 entry = templates.entry(d.decomposition, d.group, d.divisible)
