@@ -189,10 +189,10 @@ def _stored_with_moved_runs():
     source = Constraints([Constraint(SEQ, 3, 7), Constraint(FB, 7, 2), Constraint(EC, 4, 9, False, True),
                           Constraint(EC, 9, 4, True, False)])
     stored = Constraints([Constraint(SEQ, 0, 1), Constraint(EC, 1, 0, False, False)])
-    for lo, hi, shift in ((0, 4, 0), (1, 3, 10), (0, 2, 20), (2, 2, 5)):
+    for lo, hi, shift in ((0, 4, 0), (1, 3, 10), (0, 2, 20), (2, 2, 5), (0, 2, 30)):
         stored.extend_shifted(source, lo, hi, shift)
     moved = [c._replace(first=c.first + shift, second=c.second + shift)
-             for lo, hi, shift in ((0, 4, 0), (1, 3, 10), (0, 2, 20)) for c in list(source)[lo:hi]]
+             for lo, hi, shift in ((0, 4, 0), (1, 3, 10), (0, 2, 20), (0, 2, 30)) for c in list(source)[lo:hi]]
     return stored, [Constraint(SEQ, 0, 1), Constraint(EC, 1, 0, False, False), *moved]
 
 
@@ -203,9 +203,10 @@ def test_moved_runs_are_counted_and_read_as_the_rows_they_stand_for():
     from mutrose_cp.constraints import EC, SEQ, Constraint
 
     stored, expected = _stored_with_moved_runs()
-    assert len(stored) == len(expected) == 10
-    assert stored.count_by_kind() == {"SEQ": 3, "FB": 3, "EC": 4}
-    assert [(run.lo, run.hi, run.shift) for run in stored.runs()] == [(0, 2, 0), (0, 4, 0), (1, 3, 10), (0, 2, 20)]
+    assert len(stored) == len(expected) == 12
+    assert stored.count_by_kind() == {"SEQ": 4, "FB": 4, "EC": 4}
+    assert [(run.lo, run.hi, run.shift) for run in stored.runs()] == [(0, 2, 0), (0, 4, 0), (1, 3, 10), (0, 2, 20),
+                                                                    (0, 2, 30)]
     assert list(stored) == expected and stored[5] == expected[5]
     stored, _ = _stored_with_moved_runs()
     assert [row[1:3] for row in stored.rows(4, 7)] == [(c.first, c.second) for c in expected[4:7]]
@@ -213,13 +214,13 @@ def test_moved_runs_are_counted_and_read_as_the_rows_they_stand_for():
     runs = []
     for run in stored.runs():  # the runs as they were when asked for, though reading stores them
         runs.append([row[1:3] for row in run.rows.rows(run.lo, run.hi)])
-        assert len(list(stored.rows())) == 10
-    assert len(runs) == 4 and runs[2] == [(7, 2), (4, 9)]
+        assert len(list(stored.rows())) == 12
+    assert len(runs) == 5 and runs[2] == [(7, 2), (4, 9)]
     stored, _ = _stored_with_moved_runs()
     stored.append_row((0, 50, 51, 3))
     stored.add_all_pairs(EC, [60], [61], False, True)
     assert list(stored) == [*expected, Constraint(SEQ, 50, 51), Constraint(EC, 60, 61, False, True)]
-    assert [(run.lo, run.hi, run.shift) for run in stored.runs()] == [(0, 12, 0)]
+    assert [(run.lo, run.hi, run.shift) for run in stored.runs()] == [(0, 14, 0)]
 
 
 def test_the_constraints_section_is_each_constraint_formatted_in_order(monkeypatch):
@@ -238,8 +239,8 @@ def test_the_constraints_section_is_each_constraint_formatted_in_order(monkeypat
     stored, expected = _stored_with_moved_runs()
     monkeypatch.setattr(texts, "RUN_ROWS", 3)  # the stored run is cut in templates of 3 rows
     made = list(texts.constraint_texts(stored, key))
-    assert len(made) == 5 and texts.SEPARATOR.join(made) == texts.SEPARATOR.join(one_by_one(expected))
-    assert len(list(stored.runs())) == 4  # the moved runs were written without being stored
+    assert len(made) == 6 and texts.SEPARATOR.join(made) == texts.SEPARATOR.join(one_by_one(expected))
+    assert len(list(stored.runs())) == 5  # the moved runs were written without being stored
     assert texts.SEPARATOR.join(texts.constraint_texts(expected, key)) == texts.SEPARATOR.join(one_by_one(expected))
     assert '"group": "False",\n            "divisible": "True"' in made[1]
     for size in (1, 100, 1 << 20):

@@ -158,10 +158,16 @@ class Constraints(Sequence[Constraint]):
     def count_by_kind(self) -> Counter[str]:
         """How many constraints there are of each kind present (a summary's counts); moving a
         run does not change its kinds, so the pending runs are counted where they are."""
-        counts = Counter(self._kinds)
+        codes = range(len(_KINDS))
+        counts = [self._kinds.count(code) for code in codes]  # a byte count in C per kind
+        by_run: dict[tuple[int, int, int], list[int]] = {}  # the copies of one source share its run
         for other, lo, hi, _ in self._pending:
-            counts.update(other._kinds[lo:hi])
-        return Counter({str(_KINDS[code]): n for code, n in counts.items()})
+            found = by_run.get((id(other), lo, hi))
+            if found is None:
+                part = other._kinds[lo:hi]
+                found = by_run[(id(other), lo, hi)] = [part.count(code) for code in codes]
+            counts = [a + b for a, b in zip(counts, found)]
+        return Counter({str(kind): n for kind, n in zip(_KINDS, counts) if n})
 
     @overload
     def __getitem__(self, i: int) -> Constraint: ...
