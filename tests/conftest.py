@@ -11,8 +11,11 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 
-# the tests (and the commands they run) keep the parser cache in a folder of their own
-os.environ.setdefault("XDG_CACHE_HOME", tempfile.mkdtemp(prefix="mutrose-cp-test-cache-"))
+# the tests (and the commands they run) keep the parser cache in a folder of their own, removed
+# when the run ends
+if "XDG_CACHE_HOME" not in os.environ:
+    _cache = tempfile.TemporaryDirectory(prefix="mutrose-cp-test-cache-")
+    os.environ["XDG_CACHE_HOME"] = _cache.name
 REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", ROOT.parent / "shared" / "reference"))
 if not REFERENCE.is_absolute():
     REFERENCE = (ROOT / REFERENCE).resolve()
