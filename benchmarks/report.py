@@ -144,14 +144,30 @@ done about it:
   0.71 s, Task Graph 1.22 s → 1.04 s, encoding 1.52 s → 1.30 s, space 0.67 s → 0.60 s, one
   process); 50,000 rooms 70.6 s / 3810 MB (the previous report: 82.9 s / 3756 MB, on the
   machine it was made on). The same bytes.
-* **Still to do** for the 50,000-room target (60 s). At 50,000 rooms the run is one process (the
-  head of the output is not written beside the solve there: the second process would copy
-  about 2.3 GB of the pages it reads, past the 4 GB bound): loading 1.9 s, expansion 9.7 s,
-  Task Graph 16.3 s, constraints 2.0 s, encoding 16.3 s, space 6.1 s, output 21.1 s. Every
-  stage grows about 1.4 times faster than the mission from 5000 to 50,000 rooms (the objects
-  of a 3.8 GB process are far apart in memory); the space alone grows linearly.
-
-  What is left works copy by copy because the copies differ in the world: a vital-signs room's
+* **Constraints by template, and the file written from a second thread.** At 50,000 rooms the
+  output is 3.3 GB, two thirds of it eleven million constraints, and the output stage took a
+  third of the run. A stamped copy's constraints were its source's moved one by one into the
+  stored columns (2 s), then formatted one by one. The list now keeps such a run as its
+  source's rows and a shift until something reads the rows (`Constraints.runs`; the output does
+  not, and the counts by kind are read from the source's run), and the output makes one
+  template per run, the text between the keys with a free place for each key, which every copy
+  fills with its own keys in one join (`constraint_texts.py`). A stamped copy's task entries
+  fill their source's text the same way: formatting it as a format string parsed its twenty
+  kilobytes again for every copy. The kernel's share of writing 3.3 GB (3.3 s of `write` calls,
+  copying into the page cache, more when the disk falls behind) no longer waits: where one
+  process writes the whole output, a second thread writes the file in chunks of 8 MB while the
+  text is formatted (`write_behind.py`; the `write` call releases the interpreter's lock;
+  output stage 17.9 s → 13.9 s, measured in one process). Grounding a path without conditions
+  or effects, and the effects of a decomposition without effects, give one shared frozen record
+  (a third of vital signs' decompositions). Measured side by side on this machine (fresh
+  output, two runs each, alternating): 50,000 rooms 62.5 s, 60.8 s / 3899 MB → 48.9 s, 49.8 s /
+  3810 MB; 5000 rooms (three runs each) 4.59 s → 4.30 s (median). The same bytes (`cmp` at 5000
+  rooms, MD5 at 50,000).
+* **What is left.** At 50,000 rooms (py-spy, one run): loading and the initial state 1.4 s,
+  expansion 6.8 s, Task Graph 10.7 s, constraints 0.1 s, encoding 12.8 s, space 6.4 s, output
+  13.5 s. The run is one process there (the head of the output is not written beside the solve:
+  the second process would copy about 2.3 GB of the pages it reads, past the 4 GB bound). Each
+  stage still works copy by copy, because the copies differ in the world: a vital-signs room's
   patients have other conditions, so the encoding's constant folding and the space's
   components differ between rooms. But they fall in few classes: the 5000 rooms of the
   benchmark world are 8 classes of copies equal up to renaming in the world too (1334, 1333,
@@ -161,18 +177,15 @@ done about it:
   vital-signs world does), so a copy's records are its source's with the variables created in
   that run renumbered and the copy's choice variables put in, where the atoms it reads are its
   own (no writer or reader outside it) with the same initial values; those atoms' chains need
-  no copy, since only the copy's own rules, all replayed, read them. The variables'
-  names are part of the output (the layered section, the embedded model), and they hold the
-  copy's values and vertex numbers: they would be kept as a name and what to rename in it,
-  made when read. The model, and so the output, stays the same; the space's components of such
-  copies can then be taken from their class's. Finding the classes must itself be cheap: a
-  first try that read, for every copy, what its encoding reads (its atoms in order, their
-  initial values, whether another copy writes or reads them) took 1.15 s at 5000 rooms, as
-  long as the encoding it would spare. A copy's atoms are its source copy's renamed with the
-  copy's values (as the output's copy blocks rename them), so the class can come from the
-  stamping: the source's atoms once, then per copy only the initial values of the renamed
-  atoms and their writers. Even so, at 50,000 rooms this would spare about 9 of the 16 s of
-  the encoding; the 60 s target also needs the Task Graph or the output to take less.
+  no copy, since only the copy's own rules, all replayed, read them. The variables' names are
+  part of the output (the layered section, the embedded model), and they hold the copy's
+  values and vertex numbers: they would be kept as a name and what to rename in it, made when
+  read. Finding the classes must itself be cheap: a first try that read, for every copy, what
+  its encoding reads took 1.15 s at 5000 rooms, as long as the encoding it would spare; the
+  class can come from the stamping instead (the source's atoms once, then per copy only the
+  initial values of the renamed atoms and their writers). Renaming a source copy's ground
+  predicates instead of grounding each copy's paths was tried and dropped: with one or two
+  predicates per decomposition, building the renaming cost as much as grounding.
 """
 
 
