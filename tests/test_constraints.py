@@ -171,14 +171,13 @@ def test_the_constraint_list_reads_back_as_the_tuples_it_was_given():
 
 
 def test_a_list_of_constraints_reads_as_the_rows_it_would_be_stored_as():
-    """The output reads constraints as stored rows; a plain list (the API accepts any sequence)
-    is converted to the same rows, and each row stands for its constraint."""
-    from mutrose_cp.constraints import EC, FB, SEQ, Constraint, Constraints, constraint_of_row, constraint_rows
+    """The output reads constraints as stored rows (a plain list, which the API accepts, is
+    stored first): each row stands for its constraint."""
+    from mutrose_cp.constraints import EC, FB, SEQ, Constraint, Constraints, constraint_of_row
 
     given = [Constraint(SEQ, 3, 7), Constraint(FB, 7, 2), Constraint(EC, 4, 9, False, True),
              Constraint(EC, 9, 4, True, False), Constraint(EC, 1, 2, False, False)]
-    assert list(constraint_rows(given)) == list(constraint_rows(Constraints(given)))
-    assert [constraint_of_row(row) for row in constraint_rows(given)] == given
+    assert [constraint_of_row(row) for row in Constraints(given).rows()] == given
 
 
 def _stored_with_moved_runs():
@@ -213,7 +212,7 @@ def test_moved_runs_are_counted_and_read_as_the_rows_they_stand_for():
     stored, _ = _stored_with_moved_runs()
     runs = []
     for run in stored.runs():  # the runs as they were when asked for, though reading stores them
-        runs.append([row[1:3] for row in run.rows.rows(run.lo, run.hi)])
+        runs.append([row[1:3] for row in run.source.rows(run.lo, run.hi)])
         assert len(list(stored.rows())) == 12
     assert len(runs) == 5 and runs[2] == [(7, 2), (4, 9)]
     stored, _ = _stored_with_moved_runs()

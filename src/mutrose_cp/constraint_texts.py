@@ -42,7 +42,8 @@ class _RunTemplate:
         for code, first, second, flags in rows:
             head, tail = parts(code, flags)
             pieces += (end + head, "", _BETWEEN_KEYS, "")
-            vertices += array("i", (first, second))
+            vertices.append(first)
+            vertices.append(second)
             end = tail + SEPARATOR
         pieces.append(end[:-len(SEPARATOR)])
         self.pieces = pieces
@@ -68,13 +69,13 @@ def constraint_texts(constraints: Sequence[Constraint], key: Callable[[int], str
         return found
 
     templates: dict[tuple[int, int, int], _RunTemplate] = {}  # the runs other lists lend: read again
-    for rows, lo, hi, shift in stored.runs():
+    for source, lo, hi, shift in stored.runs():
         for start in range(lo, hi, RUN_ROWS):
             end = min(hi, start + RUN_ROWS)
-            if rows is stored:
-                yield _RunTemplate(rows.rows(start, end), parts).fill(key, shift)
+            if source is stored:
+                yield _RunTemplate(source.rows(start, end), parts).fill(key, shift)
                 continue
-            template = templates.get((id(rows), start, end))
+            template = templates.get((id(source), start, end))
             if template is None:
-                template = templates[(id(rows), start, end)] = _RunTemplate(rows.rows(start, end), parts)
+                template = templates[(id(source), start, end)] = _RunTemplate(source.rows(start, end), parts)
             yield template.fill(key, shift)

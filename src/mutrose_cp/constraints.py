@@ -40,10 +40,10 @@ class Constraint(NamedTuple):
 
 
 class Run(NamedTuple):
-    """Rows ``lo .. hi - 1`` of ``rows`` with their vertices moved by ``shift``
+    """Rows ``lo .. hi - 1`` of ``source`` with their vertices moved by ``shift``
     (:meth:`Constraints.runs`)."""
 
-    rows: "Constraints"
+    source: "Constraints"
     lo: int
     hi: int
     shift: int
@@ -242,14 +242,6 @@ def _combinations(kind: ConstraintKind, children: int, pairs_needed: bool) -> li
     if not pairs_needed:
         return []
     return [(i, j) for i in range(children) for j in range(i + 1, children)]
-
-
-def constraint_rows(constraints: Iterable[Constraint]) -> Iterator[tuple[int, int, int, int]]:
-    """Constraints as stored rows (kind code, first, second, flags): a :class:`Constraints`
-    gives its own, any other sequence is converted."""
-    if isinstance(constraints, Constraints):
-        return constraints.rows()
-    return map(_row_of, constraints)
 
 
 def _row_of(c: Constraint) -> tuple[int, int, int, int]:

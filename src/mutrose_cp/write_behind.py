@@ -5,8 +5,11 @@ A large output is gigabytes of text (3.3 GB at 50,000 vital-signs rooms), and th
 share of writing it (copying it into the page cache, and waiting when the disk falls behind)
 took three seconds there, every one of them spent waiting by the process that formats it.  The
 ``write`` system call releases the interpreter's lock, so a thread can make it while the
-formatting goes on: :class:`WriteBehind` gathers the text into chunks of about a megabyte,
-encodes each and hands it to its thread, at most a few chunks ahead.
+formatting goes on: :class:`WriteBehind` gathers the text into chunks of eight megabytes,
+encodes each and hands it to its thread, at most a few chunks ahead.  The chunks are large
+because the thread waits for the interpreter's lock around each ``write`` (up to the switch
+interval, 5 ms, while the formatting holds it): with chunks of a megabyte the thread fell
+behind and the formatting waited for it instead.
 
 A failure of the thread (a full disk, a file size limit) is raised by the next ``write``,
 ``flush`` or ``close``, as the file object would have raised it; :meth:`WriteBehind.abandon`
