@@ -215,8 +215,13 @@ def generate(family: str, n: int, out_dir: Path) -> tuple[Path, Path, Path]:
 
 
 def main(argv: list[str]) -> int:
-    if len(argv) != 3 or argv[0] not in FAMILIES:
+    if len(argv) != 3 or argv[0] not in FAMILIES or not argv[1].isdigit():
         print(__doc__, file=sys.stderr)
+        return 2
+    source = REFERENCE / FAMILIES[argv[0]][0]
+    if not source.is_dir():
+        print(f"error: {source}: not found; the families are made from the reference corpus's missions: "
+              "put it at ../shared/reference or set MUTROSE_REFERENCE", file=sys.stderr)
         return 2
     hddl, gm, cfg = generate(argv[0], int(argv[1]), Path(argv[2]))
     print(hddl, gm, cfg, sep="\n")

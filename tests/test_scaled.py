@@ -2,6 +2,8 @@
 world produces its tasks, and both algorithms agree."""
 from __future__ import annotations
 
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -63,3 +65,16 @@ def test_a_long_sequence_is_encoded_in_linear_work(tmp_path):
     a sequence of 10,000 take minutes).  Counted in steps, not timed."""
     small, large = _steps_to_encode(tmp_path, 100), _steps_to_encode(tmp_path, 200)
     assert small > 0 and large <= 2.2 * small
+
+
+def test_the_generator_says_where_the_corpus_it_needs_is(tmp_path):
+    """The generator makes its worlds from the reference missions: without the corpus it says
+    where it looked and how to point it elsewhere, and writes nothing."""
+    script = Path(__file__).resolve().parent.parent / "benchmarks" / "generate.py"
+    env = {**os.environ, "MUTROSE_REFERENCE": str(tmp_path / "nowhere")}
+    result = subprocess.run([sys.executable, str(script), "vital-signs", "5", str(tmp_path / "out")],
+                            capture_output=True, text=True, env=env, timeout=60)
+    assert result.returncode == 2
+    assert result.stderr.startswith(f"error: {tmp_path / 'nowhere'}/missions/vital-signs-monitoring: not found")
+    assert "MUTROSE_REFERENCE" in result.stderr and "Traceback" not in result.stderr
+    assert not (tmp_path / "out").exists()
