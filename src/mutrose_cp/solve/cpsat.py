@@ -344,11 +344,8 @@ class Listed:
         return self._vertices(self.solutions[0])
 
     def bounds(self) -> tuple[int, int] | None:
-        if not any(self.solutions):
-            return None
-        to_dec = self.var_to_dec
-        return (min(min(to_dec[v] for v in s) for s in self.solutions if s),
-                max(max(to_dec[v] for v in s) for s in self.solutions if s))
+        vertices = [self.var_to_dec[v] for s in self.solutions for v in s]  # one pass (50,000 components)
+        return (min(vertices), max(vertices)) if vertices else None
 
 
 @dataclass
