@@ -8,8 +8,6 @@ import functools
 import re
 from typing import IO, Callable, Iterable, Mapping, Sequence, TypeAlias
 
-_WRITE_SIZE = 1 << 20  # characters written at once by the streamed lists
-
 # a JSON value as PropertyTree holds it: every scalar is a string
 Tree: TypeAlias = "str | Sequence[Tree] | Mapping[str, Tree]"
 
@@ -103,8 +101,9 @@ def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
 
 def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
     """A JSON list whose elements are already serialized at ``indent + 4``; an item holds one
-    or more of them, joined by ``,\n`` and the indentation.  Streamed, about a megabyte per
-    write (a large output lists ten million constraints)."""
+    or more of them, joined by ``,\n`` and the indentation (the constraints come a run at a
+    time).  Streamed an item at a time: the file object gathers the writes (joining them here
+    first copied gigabytes of text once more)."""
     pad = " " * (indent + 4)
     separator = ",\n" + pad
     elements = iter(items)
@@ -113,13 +112,8 @@ def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
         fh.write('""')
         return
     fh.write("[\n" + pad)
-    group, size = [first], len(first)
+    fh.write(first)
     for text in elements:
-        if size >= _WRITE_SIZE:
-            fh.write(separator.join(group))
-            fh.write(separator)  # apart from the group: adding it would copy a megabyte of text again
-            group, size = [], 0
-        group.append(text)
-        size += len(text)
-    fh.write(separator.join(group))
+        fh.write(separator)
+        fh.write(text)
     fh.write("\n" + " " * indent + "]")

@@ -68,14 +68,13 @@ def constraint_texts(constraints: Sequence[Constraint], key: Callable[[int], str
             found = around[(code, flags)] = constraint_text_parts(constraint_of_row((code, 0, 0, flags)))
         return found
 
-    templates: dict[tuple[int, int, int], _RunTemplate] = {}  # the runs other lists lend: read again
+    templates: dict[tuple[int, int, int], _RunTemplate] = {}
     for source, lo, hi, shift in stored.runs():
         for start in range(lo, hi, RUN_ROWS):
             end = min(hi, start + RUN_ROWS)
-            if source is stored:
-                yield _RunTemplate(source.rows(start, end), parts).fill(key, shift)
-                continue
             template = templates.get((id(source), start, end))
             if template is None:
-                template = templates[(id(source), start, end)] = _RunTemplate(source.rows(start, end), parts)
+                template = _RunTemplate(source.rows(start, end), parts)
+                if source is not stored:  # a source's run is filled again for each of its copies
+                    templates[(id(source), start, end)] = template
             yield template.fill(key, shift)
