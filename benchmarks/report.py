@@ -164,8 +164,9 @@ done about it:
   3810 MB; 5000 rooms (three runs each) 4.59 s → 4.30 s (median). The same bytes (`cmp` at 5000
   rooms, MD5 at 50,000). The 50,000-room run varies with the machine's moment more than the
   small ones: over the day's runs of the same code it took 48.9–57.1 s (`large.py`: 51.9 s,
-  then 55.8 s), the encoding's share varying most (12.8–16.0 s), while 5000 rooms stayed at
-  4.3–4.4 s.
+  then 55.8 s), the encoding's share varying most (12.8–16.0 s), and late in the day 64–67 s,
+  when the earlier code took as long (64.4 s, 66.5 s, side by side); 5000 rooms took 4.3–4.9 s.
+  The 60 s bound holds on this machine only at its quieter moments.
 * **What is left.** At 50,000 rooms (py-spy, one run): loading and the initial state 1.4 s,
   expansion 6.8 s, Task Graph 10.7 s, constraints 0.1 s, encoding 12.8 s, space 6.4 s, output
   13.5 s. The run is one process there (the head of the output is not written beside the solve:
