@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum, StrEnum
-from typing import ClassVar, Final, Iterable, Sequence
+from typing import Any, Callable, ClassVar, Final, Iterable, Sequence
 
 
 class Const(Enum):
@@ -174,19 +174,35 @@ class IntRange:
     hi: int
 
 
+Name = str | tuple[Any, ...]  # a variable's name, or the parts its model's namer makes it from
+
+
 @dataclass
 class BoolModel:
-    """Variables and records; variable ids start at 1 (id 0 is unused, so negation works)."""
+    """Variables and records; variable ids start at 1 (id 0 is unused, so negation works).
 
-    names: list[str] = field(default_factory=lambda: [""])
+    A name may be kept as the parts it is made from (a tuple), which ``namer`` turns into text
+    when it is read (:meth:`name`): a large mission names millions of variables, and only those
+    of the components handed to the solver are ever read."""
+
+    names: list[Name] = field(default_factory=lambda: [""])
     ints: dict[int, IntRange] = field(default_factory=dict)
     records: list[Record] = field(default_factory=list)
+    namer: Callable[[tuple[Any, ...]], str] | None = field(default=None, repr=False, compare=False)
 
-    def new_bool(self, name: str) -> int:
+    def name(self, v: int) -> str:
+        """The name of variable ``v``."""
+        name = self.names[v]
+        if isinstance(name, str):
+            return name
+        assert self.namer is not None, "a name kept as parts needs the model's namer"
+        return self.namer(name)
+
+    def new_bool(self, name: Name) -> int:
         self.names.append(name)
         return len(self.names) - 1
 
-    def new_int(self, name: str, lo: int, hi: int) -> int:
+    def new_int(self, name: Name, lo: int, hi: int) -> int:
         v = self.new_bool(name)
         self.ints[v] = IntRange(lo, hi)
         return v
@@ -201,15 +217,15 @@ class BoolModel:
                 kept[l] = None
         self.records.append(Clause(tuple(kept), label))
 
-    def and_of(self, lits: Sequence[Lit], name: str) -> Lit:
+    def and_of(self, lits: Sequence[Lit], name: Name) -> Lit:
         """A literal equivalent to the AND of ``lits``."""
         return self._define(AndOf, lits, name, absorbing=FALSE)
 
-    def or_of(self, lits: Sequence[Lit], name: str) -> Lit:
+    def or_of(self, lits: Sequence[Lit], name: Name) -> Lit:
         """A literal equivalent to the OR of ``lits``."""
         return self._define(OrOf, lits, name, absorbing=TRUE)
 
-    def _define(self, record: type[AndOf] | type[OrOf], lits: Sequence[Lit], name: str, *, absorbing: Const) -> Lit:
+    def _define(self, record: type[AndOf] | type[OrOf], lits: Sequence[Lit], name: Name, *, absorbing: Const) -> Lit:
         """A new variable defined by ``record`` over ``lits``, with constants folded: the
         absorbing constant decides alone, the neutral one drops out, one literal stands for
         itself, and repeated literals count once."""

@@ -305,8 +305,8 @@ class DecompositionSpace:
     def _layer_table(self, layers: LayeredSpace, key: Callable[[int], str]) -> dict[str, object]:
         """``states``: per layer, each state as the values of the variables the blocks around it
         share; ``blocks``: per block, its edges with the task decompositions they choose."""
-        names = self.encoding.model.names
-        states = [[[f"{layers.names.get(v) or names[v]}={value}" for v, value in zip(frontier, state)] for state in layer]
+        model = self.encoding.model
+        states = [[[f"{layers.names.get(v) or model.name(v)}={value}" for v, value in zip(frontier, state)] for state in layer]
                   for frontier, layer in zip(layers.frontiers, layers.states)]
         blocks = [[{"from": str(e.source), "to": str(e.target),
                     "decompositions": [key(d) for d in sorted(self.var_to_dec[v] for v in e.choices)],

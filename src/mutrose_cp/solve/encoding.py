@@ -13,6 +13,7 @@ auxiliary variable is defined by an equivalence, so each solution is a distinct 
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any, Callable, Generic, Iterable, Sequence, TypeVar
 
@@ -20,7 +21,7 @@ from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
 from ..model import Comparison, Configuration, Domain, GoalModel, InitialState, Literal
 from ..model.task_graph import TaskGraph, TaskVertex
-from .boolean_model import FALSE, TRUE, BoolModel, Compare, Exactly, Lit, NumericEffectKind, ValueAfter, neg
+from .boolean_model import FALSE, TRUE, BoolModel, Compare, Exactly, Lit, Name, NumericEffectKind, ValueAfter, neg
 from .semantics import (
     AtomKey,
     ConstraintIndex,
@@ -38,6 +39,7 @@ from .semantics import (
     robot_precondition_writers,
     unique_branch_valid,
 )
+from .replay import CHECKS, TASK_RULES, CopyReplay
 
 SCALE = 1000  # numeric values are compared as integers in thousandths
 V = TypeVar("V")  # the value a chain of writers carries
@@ -55,17 +57,50 @@ class Encoding:
     labels: dict[str, str] = field(default_factory=dict)  # record label -> explanation
 
 
+# How the encoder's variables are named: the parts of a name are kept, and the text is made
+# when it is read (BoolModel.name).  A name's parts are (kind, atom or None, vertex, extra).
+OR_CHOICE, AFTER, KNOWN_AFTER, COMPARED, CONTEXT, PRECONDITION, ACHIEVE, SET_BELOW, CLEARED_BELOW = range(9)
+
+
+def variable_name(tg: TaskGraph, parts: tuple[Any, ...]) -> str:
+    """The text of a name kept as its parts (see above)."""
+    kind, atom, v, extra = parts
+    if kind == OR_CHOICE:
+        return f"{tg.scope(v).goal or tg.vertices[v].content}@{v}->{tg.vertices[extra].content}"
+    if kind == AFTER:
+        return f"{_atom_name(atom)} after {tg.vertices[v].content}"
+    if kind == KNOWN_AFTER:
+        return f"known {_atom_name(atom)} after {tg.vertices[v].content}"
+    if kind == COMPARED:
+        op, bound = extra
+        return f"cmp({atom}{op}{bound})"
+    if kind == CONTEXT:
+        return f"context({tg.vertices[v].content})"
+    if kind == PRECONDITION:
+        return f"pre({tg.decomposition(v).decomposition.id})"
+    if kind == ACHIEVE:
+        return f"achieve({extra}@{v})"
+    if kind == SET_BELOW:
+        return f"{_atom_name(atom)} set below {v}"
+    if kind == CLEARED_BELOW:
+        return f"{_atom_name(atom)} cleared below {v}"
+    raise ValueError(f"unknown kind of variable name: {parts!r}")
+
+
 class Encoder:
     """Builds the :class:`Encoding` of a Task Graph with the exploratory algorithm's semantics."""
 
     def __init__(self, tg: TaskGraph, constraints: Sequence[Constraint], domain: Domain, gm: GoalModel,
-                 config: Configuration, initial: InitialState, explain: bool = False) -> None:
+                 config: Configuration, initial: InitialState, explain: bool = False, replay: bool = True) -> None:
         self.tg = tg
+        # stamped copies replay a leader's records (.replay); explaining labels every record by
+        # its own vertices, so it encodes each copy in full
+        self._replay = CopyReplay(self) if replay and not explain and tg.stamped_copies else None
         self.domain = domain
         self.gm = gm
         self.config = config
         self.explain = explain
-        self.m = BoolModel()
+        self.m = BoolModel(namer=functools.partial(variable_name, tg))
         self.initial = initial_state(initial)
         self.facts, self.values = self.initial.facts, self.initial.values
         self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
@@ -100,14 +135,36 @@ class Encoder:
             return self._unique_branch()
         self._choices(0, TRUE)
         tasks = [v for v in self.queue if isinstance(tg.vertices[v], TaskVertex)]
-        for t in tasks:
-            self._task_rules(t)
-        for v in self.queue:
-            if checks_parallel_conflicts(tg, v):
-                self._conflicts(v)
-            for goal, test in achieve_tests(tg, v, self.gm, self.config):
-                self._achieve(v, goal, test)
+        self._each(TASK_RULES, tasks, self._task_rules)
+        self._each(CHECKS, self.queue, self._checks)
+        self._replay = None  # it refers back to the encoder: let both go with the encoder
         return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
+
+    def _each(self, phase: int, vertices: Sequence[int], encode: Callable[[int], None]) -> None:
+        """``encode`` each vertex in order; a stamped copy's run of vertices goes to the replay."""
+        replay = self._replay
+        if replay is None:
+            for v in vertices:
+                encode(v)
+            return
+        starts = replay.task_starts if phase == TASK_RULES else replay.queue_starts
+        i, n = 0, len(vertices)
+        while i < n:
+            copy = starts.get(vertices[i])
+            if copy is None:
+                encode(vertices[i])
+                i += 1
+                continue
+            count = len(copy.group.tasks if phase == TASK_RULES else copy.group.queue)
+            replay.run(phase, copy, vertices[i:i + count], encode)
+            i += count
+
+    def _checks(self, v: int) -> None:
+        """What the mission queue checks at ``v``: parallel conflicts and achieve conditions."""
+        if checks_parallel_conflicts(self.tg, v):
+            self._conflicts(v)
+        for goal, test in achieve_tests(self.tg, v, self.gm, self.config):
+            self._achieve(v, goal, test)
 
     def _unique_branch(self) -> Encoding:
         """§7.7: each initially valid decomposition is a mission decomposition on its own."""
@@ -139,6 +196,15 @@ class Encoder:
     # --- choices ---------------------------------------------------------------------------------
     def _choices(self, v: int, active: Lit) -> None:
         """Activity literals: an OR operator picks exactly one child; tasks pick one decomposition."""
+        replay = self._replay
+        if replay is not None:
+            copy = replay.copies.get(v)
+            if copy is not None:
+                replay.choices(copy, active, self._choose)
+                return
+        self._choose(v, active)
+
+    def _choose(self, v: int, active: Lit) -> None:
         tg = self.tg
         vx = tg.vertices[v]
         self.active[v] = active
@@ -156,7 +222,7 @@ class Encoder:
         if tg.is_or(v):
             lits = []
             for c in children:
-                lit = self.m.new_bool(f"{tg.scope(v).goal or vx.content}@{v}->{tg.vertices[c].content}")
+                lit = self.m.new_bool((OR_CHOICE, None, v, c))
                 self.or_lits[(v, c)] = lit
                 lits.append(lit)
                 self._choices(c, lit)
@@ -176,7 +242,7 @@ class Encoder:
         literals: components of tasks coupled through a few facts decompose block by block
         (:mod:`.layered`).  The tasks of a long sequence see ever longer prefixes of the atom's
         writers: those are looked up by length, not walked again, which keeps the encoding linear."""
-        root = self._chain_root(atom, self._bool_chains, self._bool_start)
+        root = self._chain_root(atom, self._bool_chains, self._bool_start, False)
         everyone = self.bool_writers.get(atom, ())
         k = len(writers)
         if k and k <= len(everyone) and writers[-1] is everyone[k - 1]:  # a subsequence: this is a prefix
@@ -195,8 +261,8 @@ class Encoder:
         if step is None:
             known_before, true_before = node.value
             xw = self.x[w]
-            name = f"{_atom_name(atom)} after {self.tg.vertices[w].content}"
-            value = (self.m.or_of([xw, known_before], f"known {name}"),
+            name = (AFTER, atom, w, None)
+            value = (self.m.or_of([xw, known_before], (KNOWN_AFTER, atom, w, None)),
                      self.m.or_of([xw, true_before], name) if pol else self.m.and_of([neg(xw), true_before], name))
             step = node.next[(w, pol)] = _Chain(value)
         return step
@@ -205,14 +271,16 @@ class Encoder:
         init = self.facts.get(atom)
         return (FALSE if init is None else TRUE), (TRUE if init else FALSE)
 
-    @staticmethod
-    def _chain_root(atom: AtomKey, chains: dict[AtomKey, "_Chain[V]"], start: Callable[[AtomKey], V]) -> "_Chain[V]":
+    def _chain_root(self, atom: AtomKey, chains: dict[AtomKey, "_Chain[V]"], start: Callable[[AtomKey], V],
+                    numeric: bool) -> "_Chain[V]":
+        if self._replay is not None:
+            self._replay.chain_read(atom, numeric)
         root = chains.get(atom)
         if root is None:
             root = chains[atom] = _Chain(start(atom))
         return root
 
-    def _bool_holds(self, atom: AtomKey, positive: bool, writers: Sequence[tuple[int, bool]], name: str) -> Lit:
+    def _bool_holds(self, atom: AtomKey, positive: bool, writers: Sequence[tuple[int, bool]], name: Name) -> Lit:
         """Literal: the open-world test ``atom == positive`` holds after ``writers``."""
         if not writers:
             init = self.facts.get(atom)
@@ -220,7 +288,7 @@ class Encoder:
         known, true = self._bool_value(atom, writers)
         return self.m.or_of([neg(known), true if positive else neg(true)], name)
 
-    def _num_holds(self, atom: AtomKey, op: str, bound: float, writers: Sequence[tuple[int, str, float]], name: str) -> Lit:
+    def _num_holds(self, atom: AtomKey, op: str, bound: float, writers: Sequence[tuple[int, str, float]], name: Name) -> Lit:
         """Literal: the open-world comparison ``atom op bound`` holds after ``writers``."""
         init = self.values.get(atom)
         if not writers:
@@ -229,7 +297,7 @@ class Encoder:
             return TRUE if compare(init, op, bound) else FALSE
         known, value = self._num_value(atom, writers)
         assert isinstance(value, int)
-        sat = self.m.new_bool(f"cmp({atom}{op}{bound})")
+        sat = self.m.new_bool((COMPARED, atom, -1, (op, bound)))
         self.m.records.append(Compare(sat, value, op, round(bound * SCALE)))
         return self.m.or_of([neg(known), sat], name)
 
@@ -239,7 +307,7 @@ class Encoder:
         looked up by length for a prefix of all of them (as :meth:`_bool_value`); the variable is
         None before the first writer."""
         init = self.values.get(atom)
-        root = self._chain_root(atom, self._num_chains, lambda _: (TRUE if init is not None else FALSE, None))
+        root = self._chain_root(atom, self._num_chains, lambda _: (TRUE if init is not None else FALSE, None), True)
         everyone = self.num_writers.get(atom, [])
         k = len(writers)
         if k and k <= len(everyone) and writers[-1] is everyone[k - 1]:  # a subsequence: this is a prefix
@@ -269,14 +337,13 @@ class Encoder:
         if step is None:
             known, prev_var = node.value
             xw = self.x[w]
-            name = f"{_atom_name(atom)} after {self.tg.vertices[w].content}"
-            nxt = self.m.new_int(name, -span, span)
+            nxt = self.m.new_int((AFTER, atom, w, None), -span, span)
             prev_const = round(init * SCALE) if init is not None else 0
             self.m.records.append(ValueAfter(xw, known, nxt, prev_var, prev_const, scaled, NumericEffectKind(kind)))
-            step = node.next[(w, kind, scaled)] = _Chain((self.m.or_of([known, xw], f"known {name}"), nxt))
+            step = node.next[(w, kind, scaled)] = _Chain((self.m.or_of([known, xw], (KNOWN_AFTER, atom, w, None)), nxt))
         return step
 
-    def _state_test(self, test: Test, decs: Seen, name: str) -> Lit:
+    def _state_test(self, test: Test, decs: Seen, name: Name) -> Lit:
         """Literal for an achieve/context test evaluated after the chosen ``decs``."""
         if isinstance(test, FactTest):
             atom = (test.predicate, test.args)
@@ -309,7 +376,7 @@ class Encoder:
         seen = self.scopes.seen_runs_by_task(t)
         writers_seen: dict[AtomKey, Sequence[tuple[int, bool]]] = {}  # the decompositions share them
         for i, context in enumerate(tg.task(t).contexts):
-            ok = self._state_test(context, seen, f"context({tg.vertices[t].content})")
+            ok = self._state_test(context, seen, (CONTEXT, None, t, None))
             self.m.clause([neg(self.active[t]), ok], self._label(lambda: (
                 f"context:{t}:{i}", f"task instance {tg.vertices[t].content}: the creation condition "
                 f"{_show_test(context)} that an earlier task enables does not hold where it starts")))
@@ -327,10 +394,10 @@ class Encoder:
                     atom = (c.predicate, c.args)
                     if atom not in writers_seen:
                         writers_seen[atom] = self._bool_writers(atom, seen)
-                    ok = self._bool_holds(atom, c.positive, writers_seen[atom], f"pre({dec.id})")
+                    ok = self._bool_holds(atom, c.positive, writers_seen[atom], (PRECONDITION, None, d, None))
                 else:
                     atom = (c.function, c.args)
-                    ok = self._num_holds(atom, c.op, c.value, self._num_writers(atom, seen), f"pre({dec.id})")
+                    ok = self._num_holds(atom, c.op, c.value, self._num_writers(atom, seen), (PRECONDITION, None, d, None))
                 self.m.clause([neg(self.x[d]), ok], label)
             self._robot_rules(d, t)
 
@@ -361,9 +428,8 @@ class Encoder:
                         if self.tg.vertices[a].parent != self.tg.vertices[b].parent:
                             self.m.clause([neg(self.x[a]), neg(self.x[b])], label)
             else:
-                fact = _atom_name(atom)
-                any_pos = self.m.or_of([self.x[a] for a in c.setting_true], f"{fact} set below {v}")
-                any_neg = self.m.or_of([self.x[b] for b in c.setting_false], f"{fact} cleared below {v}")
+                any_pos = self.m.or_of([self.x[a] for a in c.setting_true], (SET_BELOW, atom, v, None))
+                any_neg = self.m.or_of([self.x[b] for b in c.setting_false], (CLEARED_BELOW, atom, v, None))
                 self.m.clause([neg(any_pos), neg(any_neg)], label)
 
     def _achieve(self, v: int, goal: str, test: Test) -> None:
@@ -373,7 +439,7 @@ class Encoder:
         decs = self.scopes.seen_runs_by_achieve(v)
         parts = list(_conjuncts(test))
         for i, part in enumerate(parts):
-            holds = self._state_test(part, decs, f"achieve({goal}@{v})")
+            holds = self._state_test(part, decs, (ACHIEVE, None, v, goal))
             self.m.clause([neg(self.active[v]), holds],
                           self._label(lambda: (f"achieve:{v}:{goal}:{i}",
                                                f"achieve condition of goal {goal}: {_show_test(part)}")))

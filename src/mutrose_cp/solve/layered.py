@@ -240,7 +240,7 @@ def as_chains(bm: BoolModel, records: Sequence[Record]) -> tuple[list[Record], d
         so_far = lits[0]
         for lit in lits[1:-1]:
             step = len(bm.names) + len(names)
-            names[step] = f"{bm.names[r.target]} up to {_name(bm, lit)}"
+            names[step] = f"{bm.name(r.target)} up to {_name(bm, lit)}"
             out.append(type(r)((so_far, lit), step))
             so_far = step
         out.append(type(r)((so_far, lits[-1]), r.target))
@@ -250,7 +250,7 @@ def as_chains(bm: BoolModel, records: Sequence[Record]) -> tuple[list[Record], d
 def _name(bm: BoolModel, lit: Lit) -> str:
     if not isinstance(lit, int):
         return lit.value
-    return bm.names[lit] if lit > 0 else f"not {bm.names[-lit]}"
+    return bm.name(lit) if lit > 0 else f"not {bm.name(-lit)}"
 
 
 def cut_into_blocks(records: Sequence[Record]) -> list[list[Record]]:

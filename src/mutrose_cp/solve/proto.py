@@ -66,7 +66,7 @@ class ProtoBuilder:
             variable = self.proto.variables.add()
             bounds = self.bm.ints.get(v)
             variable.domain.extend([bounds.lo, bounds.hi] if bounds is not None else [0, 1])
-            variable.name = self.bm.names[v]
+            variable.name = self.bm.name(v)
             self.vars[v] = index
         return index
 
