@@ -25,6 +25,7 @@ from .boolean_model import FALSE, TRUE, BoolModel, Compare, Exactly, Lit, Name, 
 from .semantics import (
     AtomKey,
     ConstraintIndex,
+    NO_EFFECTS,
     EffectScopes,
     Effects,
     ParallelConflicts,
@@ -103,7 +104,12 @@ class Encoder:
         self.m = BoolModel(namer=functools.partial(variable_name, tg))
         self.initial = initial_state(initial)
         self.facts, self.values = self.initial.facts, self.initial.values
-        self.effects: dict[int, Effects] = {d.index: effects_of(d.decomposition) for d in tg.decompositions()}
+        # the effects of the decompositions that have any (a large mission's most have none)
+        self.effects: dict[int, Effects] = {}
+        for d in tg.decompositions():
+            effects = effects_of(d.decomposition)
+            if effects is not NO_EFFECTS:
+                self.effects[d.index] = effects
         self.index = ConstraintIndex.of(constraints)
         self.scopes = EffectScopes(tg)
         self.queue = mission_queue(tg)

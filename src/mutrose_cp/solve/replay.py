@@ -37,7 +37,7 @@ from ..conditions import AllOf, AnyOf, FactTest, Test
 from ..model import Literal
 from ..model.task_graph import OperatorVertex, ScopeVertex, TaskVertex
 from .boolean_model import FALSE, TRUE, AndOf, Clause, Const, Exactly, Lit, OrOf, Record
-from .semantics import AtomKey, achieve_tests
+from .semantics import NO_EFFECTS, AtomKey, achieve_tests
 
 if TYPE_CHECKING:
     from .encoding import Encoder
@@ -297,7 +297,7 @@ class CopyReplay:
                             atoms[(c.predicate, c.args)] = None
                         else:
                             numeric[(c.function, c.args)] = None
-                effects = enc.effects[dv.index]
+                effects = enc.effects.get(dv.index, NO_EFFECTS)
                 if effects.numeric:
                     raise _Unsupported
                 for atom, _ in effects.facts:

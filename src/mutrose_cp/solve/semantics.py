@@ -48,13 +48,13 @@ class Effects:
     free: tuple[Literal, ...]  # non-ground effects (over the task's parameter names)
 
 
-_NO_EFFECTS = Effects((), (), ())
+NO_EFFECTS = Effects((), (), ())
 
 
 def effects_of(dec: Decomposition) -> Effects:
     p = dec.predicates
     if not p.effects and not p.numeric_effects:
-        return _NO_EFFECTS  # most decompositions of a large mission: one frozen record serves them
+        return NO_EFFECTS  # most decompositions of a large mission: one frozen record serves them
     facts: list[tuple[AtomKey, bool]] = []
     free: list[Literal] = []
     for e in p.effects:  # one pass: the encoder asks this of every decomposition
