@@ -10,6 +10,8 @@ changes are folded in as constants while the model is built.
 The model is kept in a small solver-neutral form (:class:`BoolModel`) so it can be split into
 independent components before it is handed to CP-SAT (:mod:`mutrose_cp.solve.cpsat`), and every
 auxiliary variable is defined by an equivalence, so each solution is a distinct decomposition.
+Variables are named by their parts (:func:`variable_name` makes the text when it is read), and
+the stamped forAll copies of a class replay their leader's records (:mod:`.replay`).
 """
 from __future__ import annotations
 
