@@ -98,7 +98,9 @@ class Encoder:
         self.tg = tg
         # stamped copies replay a leader's records (.replay); explaining labels every record by
         # its own vertices, so it encodes each copy in full
-        self._replay = CopyReplay(self) if replay and not explain and tg.stamped_copies else None
+        self._replaying = replay and not explain
+        self._replay: CopyReplay | None = None  # while encoding
+        self.replayed: tuple[int, int] = (0, 0)  # copies that replayed their task rules, classes that led them
         self.domain = domain
         self.gm = gm
         self.config = config
@@ -108,10 +110,10 @@ class Encoder:
         self.facts, self.values = self.initial.facts, self.initial.values
         # the effects of the decompositions that have any (a large mission's most have none)
         self.effects: dict[int, Effects] = {}
-        for d in tg.decompositions():
-            effects = effects_of(d.decomposition)
+        for dv in tg.decompositions():
+            effects = effects_of(dv.decomposition)
             if effects is not NO_EFFECTS:
-                self.effects[d.index] = effects
+                self.effects[dv.index] = effects
         self.index = ConstraintIndex.of(constraints)
         self.scopes = EffectScopes(tg)
         self.queue = mission_queue(tg)
@@ -141,11 +143,17 @@ class Encoder:
         tg = self.tg
         if tg.unique_branch:
             return self._unique_branch()
-        self._choices(0, TRUE)
-        tasks = [v for v in self.queue if isinstance(tg.vertices[v], TaskVertex)]
-        self._each(TASK_RULES, tasks, self._task_rules)
-        self._each(CHECKS, self.queue, self._checks)
-        self._replay = None  # it refers back to the encoder: let both go with the encoder
+        if self._replaying and tg.stamped_copies:
+            self._replay = CopyReplay(self)
+        try:
+            self._choices(0, TRUE)
+            tasks = [v for v in self.queue if isinstance(tg.vertices[v], TaskVertex)]
+            self._each(TASK_RULES, tasks, self._task_rules)
+            self._each(CHECKS, self.queue, self._checks)
+            if self._replay is not None:
+                self.replayed = self._replay.summary()
+        finally:
+            self._replay = None  # it refers back to the encoder: let both go with the encoder
         return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
 
     def _each(self, phase: int, vertices: Sequence[int], encode: Callable[[int], None]) -> None:

@@ -121,6 +121,13 @@ class CopyReplay:
         self.touched: dict[AtomKey, bool] | None = None  # a leader's run: atoms whose chains it read
         self.owner: dict[AtomKey, int | None] = {}  # atom -> the copy whose run last read its chain
 
+    def summary(self) -> tuple[int, int]:
+        """How many copies replayed a leader's task rules, and how many classes led them."""
+        copies = self.copies.values()
+        followers = sum(1 for c in copies if c.leader is not None and c.leader.copy is not c)
+        groups = {id(c.group): c.group for c in copies}.values()
+        return followers, sum(len(g.classes) for g in groups)
+
     def chain_read(self, atom: AtomKey, numeric: bool) -> None:
         """The encoder reads (and may extend) the chain of values of ``atom``."""
         self.owner[atom] = self.run_copy
@@ -313,12 +320,10 @@ class CopyReplay:
         out: list[Any] = []
         for atom in atoms:
             written = writers.get(atom)
-            if written:
-                offsets = tuple((d - start, value) for d, value in written)
-                if not (0 <= offsets[0][0] and offsets[-1][0] < size):  # in vertex order
-                    offsets = None  # type: ignore[assignment]
-            else:
-                offsets = ()
+            offsets: tuple[tuple[int, bool], ...] | None = ()
+            if written:  # in vertex order: inside the copy when the first and the last are
+                inside = start <= written[0][0] and written[-1][0] < start + size
+                offsets = tuple((d - start, value) for d, value in written) if inside else None
             status = 0 if atom not in owner else 1 if owner[atom] == start else 2
             out.append((facts.get(atom), offsets, status))
         return out
