@@ -66,7 +66,7 @@ class _Group:
     choices: Callable[..., None] | None = None  # the source's choices, compiled (see _compile_choices)
     choices_root: Lit | None = None
     closed: bool = False  # copies are encoded in full: a rule of the module docstring fails
-    keys: list[Any] | None = None  # the first copy's parameter names, in order
+    irregular: list[Any] | None = None  # where the first copy's values are not single values
     pattern: list[int] | None = None  # and where each of its values first appears
     templates: list[Template] = field(default_factory=list)  # atoms read or written by the task rules
     numeric: list[Template] = field(default_factory=list)  # numeric atoms their preconditions compare
@@ -86,7 +86,6 @@ class _Copy:
 class _Leader:
     copy: _Copy
     runs: dict[int, Callable[..., None]] = field(default_factory=dict)  # phase -> its run, compiled
-    atoms: dict[int, list[Template]] = field(default_factory=dict)  # phase -> the atoms its run names
     checks: tuple[Any, ...] | None = None  # the achieve tests inside it, as a shape, and their atoms' class
     checked: list[Template] = field(default_factory=list)
 
@@ -179,13 +178,13 @@ class CopyReplay:
 
     def _task_rules(self, copy: _Copy, vertices: Sequence[int], encode: Callable[[int], None]) -> None:
         group = copy.group
-        keys, values = self._bindings(copy)
+        irregular, values = self._bindings(copy)
         pattern = _pattern(values)
         copy.values = values
-        if group.keys is None:  # the first copy: it fixes the templates
-            group.keys, group.pattern = keys, pattern
+        if group.irregular is None:  # the first copy: it fixes the templates
+            group.irregular, group.pattern = irregular, pattern
             group.templates, group.numeric = self._templates(copy, values)
-        elif keys != group.keys or pattern != group.pattern:
+        elif irregular != group.irregular or pattern != group.pattern:
             self._plain(TASK_RULES, copy, vertices, encode)
             return
         atoms = _instances(group.templates, values)
@@ -196,7 +195,7 @@ class CopyReplay:
             self._replay(TASK_RULES, copy, leader, atoms)
         elif leader is None and len(group.classes) < LEADERS and _replayable(key):
             leader = copy.leader = group.classes[key] = _Leader(copy)
-            self._lead(TASK_RULES, copy, vertices, encode, group.templates, atoms)
+            self._lead(TASK_RULES, copy, vertices, encode, atoms)
         else:
             self._plain(TASK_RULES, copy, vertices, encode)
 
@@ -216,7 +215,7 @@ class CopyReplay:
                 self._plain(CHECKS, copy, vertices, encode)
                 return
             leader.checks = (shape, *facts)
-            self._lead(CHECKS, copy, vertices, encode, group.templates + checked, _instances(group.templates, values) + atoms)
+            self._lead(CHECKS, copy, vertices, encode, _instances(group.templates, values) + atoms)
             return
         run = leader.runs.get(CHECKS)
         if run is not None and leader.checks is not None:
@@ -237,8 +236,9 @@ class CopyReplay:
         copy.ranges[phase] = (b, len(self.enc.m.names))
 
     def _lead(self, phase: int, copy: _Copy, vertices: Sequence[int], encode: Callable[[int], None],
-              templates: list[Template], atoms: list[AtomKey]) -> None:
-        """Encode the run of the leader ``copy`` in full, and keep it compiled."""
+              atoms: list[AtomKey]) -> None:
+        """Encode the run of the leader ``copy`` in full, and keep it compiled (over ``atoms``,
+        which the other copies of its class give renamed)."""
         enc, m = self.enc, self.enc.m
         b, r0 = len(m.names), len(m.records)
         self.touched = {}
