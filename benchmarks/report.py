@@ -167,29 +167,40 @@ done about it:
   then 55.8 s), the encoding's share varying most (12.8–16.0 s), and late in the day 64–67 s,
   when the earlier code took as long (64.4 s, 66.5 s, side by side); 5000 rooms took 4.3–4.9 s.
   The 60 s bound holds on this machine only at its quieter moments.
-* **What is left.** At 50,000 rooms (py-spy, one run): loading and the initial state 1.4 s,
-  expansion 6.8 s, Task Graph 10.7 s, constraints 0.1 s, encoding 12.8 s, space 6.4 s, output
-  13.5 s. The run is one process there (the head of the output is not written beside the solve:
-  the second process would copy about 2.3 GB of the pages it reads, past the 4 GB bound). Each
-  stage still works copy by copy, because the copies differ in the world: a vital-signs room's
-  patients have other conditions, so the encoding's constant folding and the space's
-  components differ between rooms. But they fall in few classes: the 5000 rooms of the
-  benchmark world are 8 classes of copies equal up to renaming in the world too (1334, 1333,
-  1000, 334, 333, 333, 333 and 1 rooms). The next step is to encode one copy per class and
-  replay its records for the others: the encoding's phases (choices, task rules, conflicts and
-  achieve conditions) each meet a copy's vertices as one run (the mission queue of the
-  vital-signs world does), so a copy's records are its source's with the variables created in
-  that run renumbered and the copy's choice variables put in, where the atoms it reads are its
-  own (no writer or reader outside it) with the same initial values; those atoms' chains need
-  no copy, since only the copy's own rules, all replayed, read them. The variables' names are
-  part of the output (the layered section, the embedded model), and they hold the copy's
-  values and vertex numbers: they would be kept as a name and what to rename in it, made when
-  read. Finding the classes must itself be cheap: a first try that read, for every copy, what
-  its encoding reads took 1.15 s at 5000 rooms, as long as the encoding it would spare; the
-  class can come from the stamping instead (the source's atoms once, then per copy only the
-  initial values of the renamed atoms and their writers). Renaming a source copy's ground
-  predicates instead of grounding each copy's paths was tried and dropped: with one or two
-  predicates per decomposition, building the renaming cost as much as grounding.
+* **Replaying class leaders in the encoding.** The stamped copies of a forAll fall in few
+  classes once the world is read too: of the 5000 rooms of the benchmark world, the 4997 stamped from the
+  first room are 7 classes of copies whose atoms have, renamed, the same initial values,
+  writers and chains. The encoder
+  now encodes the first copy of each class in full and keeps its run of each phase (choices,
+  task rules, checks) compiled into one function, which appends the run's variables, records
+  and chains of values for another copy, given where that copy's variables start; the other
+  copies call it (`solve/replay.py`). The class is one dictionary lookup: the first copy of a
+  source fixes the templates (each atom its task rules read or its decompositions write, as
+  the places of its arguments among the copy's parameter values), and a copy's key is what
+  the world says of its templated atoms. Its achieve conditions are still read from its own
+  vertices and compared. Variables are named by their parts, made into text only when read
+  (`BoolModel.name`): the solver reads the names of the components it is handed, not of the
+  million variables. The model is the full encoding's, variable for variable and record for
+  record (`tests/test_encoding_replay.py`). Encoding at 50,000 rooms 17.3 s → 10.0 s (one
+  process, the same moment). Measured side by side (fresh output, alternating): 5000 rooms
+  4.84, 4.99, 5.00 s → 4.03, 4.25, 4.31 s; 50,000 rooms 66.9 s → 59.5 s, then 62.9 s → 54.7 s (at
+  slow moments of the machine), 3823 → 3837 MB. `large.py`: 57.6 s, 57.1 s. The same bytes (`cmp`, MD5). A first version kept
+  the encoder alive through a reference cycle (the collector is paused during a command):
+  +800 MB at 50,000 rooms; the encoder now drops the replay when it is done. Another read a
+  shared atom's writers once per copy before checking that they lie inside it: quadratic on
+  the coupled family (10,000 deliveries 4.7 s → 27 s), caught by the benchmark table and fixed
+  (5.4 s).
+* **What is left.** At 50,000 rooms (py-spy, one run, at a slow moment: the same stages took
+  about a fifth less the day before): loading and the initial state 1.7 s, expansion 7.7 s,
+  Task Graph 13.1 s, encoding 9.1 s (its setup 2.3 s: effects, scopes, the mission queue),
+  space 5.7 s, output 13.5 s. The output's 3.3 GB take the second thread 7–10 s of `write`
+  calls (this disk takes 300–470 MB/s), so formatting it faster gains little. The space is
+  still found record by record: a follower's component is its leader's renamed, which the
+  replay could hand over instead (the next step). The expansion and the Task Graph still run
+  per copy: a copy's queries read the world (each room's patients) before it is known to be a
+  renaming of another, and grounding a copy's paths costs about as much as renaming its
+  source's (tried and dropped: with one or two predicates per decomposition, building the
+  renaming cost as much as grounding).
 """
 
 
