@@ -60,6 +60,8 @@ class _Progress:
         self.stage(self.label, done, total)
 
     def stage(self, label: str, done: int, total: int) -> None:
+        if not self.enabled:
+            return  # called once per component or copy: a large mission calls it 50,000 times
         of = f"/{total}" if total else ""
         self.show(f"{label}: {done}{of}", ended=bool(total) and done >= total, now=done >= total)
 

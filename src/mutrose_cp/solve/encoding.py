@@ -117,7 +117,7 @@ class Encoder:
         self.index = ConstraintIndex.of(constraints)
         self.scopes = EffectScopes(tg)
         self.queue = mission_queue(tg)
-        self.queue_pos = {v: i for i, v in enumerate(self.queue)}
+        self.queue_pos = dict(zip(self.queue, range(len(self.queue))))
         self.x: dict[int, Lit] = {}
         self.active: dict[int, Lit] = {}
         self.or_lits: dict[tuple[int, int], Lit] = {}
