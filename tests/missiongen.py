@@ -73,8 +73,9 @@ import json
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator, Union
+from typing import Any, Callable, Iterator, Union
 
+from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
 MAX_TASK_INSTANCES = 6  # GM tasks x selected rooms (basic shape)
@@ -364,6 +365,27 @@ def load_mission(spec: MissionSpec):
 
     with tempfile.TemporaryDirectory(prefix="mutrose-gen-") as d:
         return Mission.load(*spec.write(d))
+
+
+def seeded_draws(seed_value: int, examples: int, stage: str, check: Callable[[Any], bool]) -> list[bool]:
+    """``check`` on each mission of ``examples`` seeded draws of :func:`repeated_rooms` that loads
+    and reaches ``stage`` (a stage of ``Mission``, such as ``"expansion"``), in order: what it
+    said of each.  A property test says what holds; this says that it was not vacuous."""
+    said: list[bool] = []
+
+    @seed(seed_value)
+    @settings(max_examples=examples, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+    @given(repeated_rooms())
+    def draw(spec: MissionSpec) -> None:
+        try:
+            m = load_mission(spec)
+            getattr(m, stage)
+        except Exception:
+            return
+        said.append(check(m))
+
+    draw()
+    return said
 
 
 # ---------------------------------------------------------------------------------------------

@@ -19,7 +19,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, event, given, seed, settings
+from hypothesis import HealthCheck, event, given, settings
 
 from mutrose_cp.conditions import FactTest
 from mutrose_cp.mission import Mission
@@ -29,7 +29,7 @@ from mutrose_cp.solve.replay import TASK_RULES
 from mutrose_cp.solve.semantics import achieve_tests
 
 from conftest import ROOT, require_reference
-from missiongen import MissionSpec, load_mission, repeated_rooms
+from missiongen import MissionSpec, load_mission, repeated_rooms, seeded_draws
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from generate import generate  # noqa: E402
@@ -74,23 +74,9 @@ def test_replayed_encoding_is_the_full_encoding_on_random_missions(spec: Mission
 
 def test_copies_are_replayed_on_random_missions() -> None:
     """The property above is not vacuous: copies are replayed on a fair share of the draws."""
-    used, drawn = [], []
-
-    @seed(2)
-    @settings(max_examples=60, deadline=None, database=None, suppress_health_check=list(HealthCheck))
-    @given(repeated_rooms())
-    def draw(spec: MissionSpec) -> None:
-        try:
-            m = load_mission(spec)
-            m.task_graph
-        except Exception:
-            return
-        drawn.append(spec)
-        used.append(_replayed(m)[0] > 0)
-
-    draw()
-    assert len(drawn) >= 20
-    assert sum(used) >= len(drawn) // 8, (sum(used), len(drawn))
+    used = seeded_draws(2, 60, "task_graph", lambda m: _replayed(m)[0] > 0)
+    assert len(used) >= 20
+    assert sum(used) >= len(used) // 8, (sum(used), len(used))
 
 
 @pytest.mark.parametrize("family,n", [("vital-signs", 40), ("delivery", 12), ("pickup", 12)])
@@ -103,13 +89,11 @@ def test_benchmark_worlds_are_replayed(tmp_path: Path, family: str, n: int) -> N
         assert classes > 1, "the rooms' patients differ: more than one class"
 
 
-def _vital_signs(tmp_path: Path, rooms: int, edit_world=None, edit_goal_model=None) -> Mission:
+def _vital_signs(tmp_path: Path, rooms: int, edit_world=None) -> Mission:
     hddl, gm, cfg = generate("vital-signs", rooms, tmp_path)
     if edit_world is not None:
         world = tmp_path / f"vital-signs-{rooms}.xml"
         world.write_text(edit_world(world.read_text(encoding="utf-8")), encoding="utf-8")
-    if edit_goal_model is not None:
-        gm.write_text(edit_goal_model(gm.read_text(encoding="utf-8")), encoding="utf-8")
     return Mission.load(hddl, gm, cfg)
 
 

@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, event, given, seed, settings
+from hypothesis import HealthCheck, event, given, settings
 
 from mutrose_cp.constraint_texts import SEPARATOR, constraint_texts
 from mutrose_cp.constraints import _stamped, generate_constraints
@@ -30,7 +30,8 @@ from mutrose_cp.stamping import plan_stamping
 from mutrose_cp.taskgraph import build_task_graph, stamped_task_graph
 
 from conftest import ROOT, require_reference
-from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission, repeated_rooms
+from missiongen import (Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission, repeated_rooms,
+                        seeded_draws)
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from generate import generate  # noqa: E402
@@ -85,23 +86,9 @@ def test_stamped_graph_is_the_full_construction_on_random_missions(spec: Mission
 
 def test_stamping_is_used_on_random_missions() -> None:
     """The property above is not vacuous: stamping is used on a fair share of the draws."""
-    used, drawn = [], []
-
-    @seed(20261201)
-    @settings(max_examples=40, deadline=None, database=None, suppress_health_check=list(HealthCheck))
-    @given(repeated_rooms())
-    def draw(spec: MissionSpec) -> None:
-        try:
-            m = load_mission(spec)
-            m.expansion
-        except Exception:
-            return
-        drawn.append(spec)
-        used.append(_agree(m))
-
-    draw()
-    assert len(drawn) >= 20
-    assert sum(used) >= len(drawn) // 4, (sum(used), len(drawn))
+    used = seeded_draws(20261201, 40, "expansion", _agree)
+    assert len(used) >= 20
+    assert sum(used) >= len(used) // 4, (sum(used), len(used))
 
 
 def test_reference_corpus(monkeypatch: pytest.MonkeyPatch) -> None:

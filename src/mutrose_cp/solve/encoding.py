@@ -65,29 +65,23 @@ class Encoding:
 OR_CHOICE, AFTER, KNOWN_AFTER, COMPARED, CONTEXT, PRECONDITION, ACHIEVE, SET_BELOW, CLEARED_BELOW = range(9)
 
 
+_NAMES: dict[int, Callable[[TaskGraph, Any, int, Any], str]] = {  # kind -> (tg, atom, vertex, extra) -> text
+    OR_CHOICE: lambda tg, _, v, child: f"{tg.scope(v).goal or tg.vertices[v].content}@{v}->{tg.vertices[child].content}",
+    AFTER: lambda tg, atom, w, _: f"{_atom_name(atom)} after {tg.vertices[w].content}",
+    KNOWN_AFTER: lambda tg, atom, w, _: f"known {_atom_name(atom)} after {tg.vertices[w].content}",
+    COMPARED: lambda tg, atom, _, test: f"cmp({atom}{test[0]}{test[1]})",  # test: (op, bound)
+    CONTEXT: lambda tg, _, t, __: f"context({tg.vertices[t].content})",
+    PRECONDITION: lambda tg, _, d, __: f"pre({tg.decomposition(d).decomposition.id})",
+    ACHIEVE: lambda tg, _, v, goal: f"achieve({goal}@{v})",
+    SET_BELOW: lambda tg, atom, v, _: f"{_atom_name(atom)} set below {v}",
+    CLEARED_BELOW: lambda tg, atom, v, _: f"{_atom_name(atom)} cleared below {v}",
+}
+
+
 def variable_name(tg: TaskGraph, parts: tuple[Any, ...]) -> str:
     """The text of a name kept as its parts (see above)."""
     kind, atom, v, extra = parts
-    if kind == OR_CHOICE:
-        return f"{tg.scope(v).goal or tg.vertices[v].content}@{v}->{tg.vertices[extra].content}"
-    if kind == AFTER:
-        return f"{_atom_name(atom)} after {tg.vertices[v].content}"
-    if kind == KNOWN_AFTER:
-        return f"known {_atom_name(atom)} after {tg.vertices[v].content}"
-    if kind == COMPARED:
-        op, bound = extra
-        return f"cmp({atom}{op}{bound})"
-    if kind == CONTEXT:
-        return f"context({tg.vertices[v].content})"
-    if kind == PRECONDITION:
-        return f"pre({tg.decomposition(v).decomposition.id})"
-    if kind == ACHIEVE:
-        return f"achieve({extra}@{v})"
-    if kind == SET_BELOW:
-        return f"{_atom_name(atom)} set below {v}"
-    if kind == CLEARED_BELOW:
-        return f"{_atom_name(atom)} cleared below {v}"
-    raise ValueError(f"unknown kind of variable name: {parts!r}")
+    return _NAMES[kind](tg, atom, v, extra)
 
 
 class Encoder:

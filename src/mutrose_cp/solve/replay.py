@@ -44,7 +44,9 @@ if TYPE_CHECKING:
 
 CHOICES, TASK_RULES, CHECKS = 1, 2, 3  # the encoder's phases
 LEADERS = 16  # classes kept per source copy: the copies of a large world fall in a few
-_BASES = ("one", "two", "b", "r")  # where a leader's literal lies: its choices, its task rules, this run, its root
+
+
+_NOBODY: Any = object()  # no run has read an atom's chain
 
 
 class _Unsupported(Exception):
@@ -63,7 +65,7 @@ class _Group:
     tasks: list[int]  # offsets of the task vertices, in vertex order
     queue: list[int]  # offsets of the mission-queue vertices (tasks and operators), in order
     checked: list[int]  # offsets of the vertices that can have achieve conditions (by structure)
-    choices: Callable[..., None] | None = None  # the source's choices, compiled (see _compile_choices)
+    choices: Callable[..., None] | None = None  # the source's choices, compiled (see _choices_source)
     choices_root: Lit | None = None
     closed: bool = False  # copies are encoded in full: a rule of the module docstring fails
     irregular: list[Any] | None = None  # where the first copy's values are not single values
@@ -79,7 +81,8 @@ class _Copy:
     group: _Group
     ranges: dict[int, tuple[int, int]] = field(default_factory=dict)  # phase -> its variables
     leader: "_Leader | None" = None  # the leader of its class (itself when it leads)
-    values: list[str] | None = None
+    values: list[str] | None = None  # its parameter values (kept from the task rules to the checks)
+    atoms: list[AtomKey] | None = None  # its templated atoms (likewise)
 
 
 @dataclass
@@ -187,7 +190,7 @@ class CopyReplay:
         elif irregular != group.irregular or pattern != group.pattern:
             self._plain(TASK_RULES, copy, vertices, encode)
             return
-        atoms = _instances(group.templates, values)
+        atoms = copy.atoms = _instances(group.templates, values)
         key = (*self._class(copy, atoms), *self._numeric_class(copy, _instances(group.numeric, values)))
         leader = group.classes.get(key)
         if leader is not None and TASK_RULES in leader.runs:
@@ -200,8 +203,10 @@ class CopyReplay:
             self._plain(TASK_RULES, copy, vertices, encode)
 
     def _checks(self, copy: _Copy, vertices: Sequence[int], encode: Callable[[int], None]) -> None:
-        leader, values = copy.leader, copy.values
-        if leader is None or values is None or TASK_RULES not in leader.runs or TASK_RULES not in copy.ranges:
+        leader, values, templated = copy.leader, copy.values, copy.atoms
+        copy.values = copy.atoms = None  # not needed after the checks
+        if leader is None or values is None or templated is None or TASK_RULES not in leader.runs \
+                or TASK_RULES not in copy.ranges:
             self._plain(CHECKS, copy, vertices, encode)
             return
         enc, group = self.enc, copy.group
@@ -215,13 +220,13 @@ class CopyReplay:
                 self._plain(CHECKS, copy, vertices, encode)
                 return
             leader.checks = (shape, *facts)
-            self._lead(CHECKS, copy, vertices, encode, _instances(group.templates, values) + atoms)
+            self._lead(CHECKS, copy, vertices, encode, templated + atoms)
             return
         run = leader.runs.get(CHECKS)
         if run is not None and leader.checks is not None:
             shape, atoms = _flatten(tests)
             if atoms == _instances(leader.checked, values) and (shape, *self._class(copy, atoms)) == leader.checks:
-                self._replay(CHECKS, copy, leader, _instances(group.templates, values) + atoms)
+                self._replay(CHECKS, copy, leader, templated + atoms)
                 return
         self._plain(CHECKS, copy, vertices, encode)
 
@@ -315,7 +320,7 @@ class CopyReplay:
         """What the world says of ``atoms`` for ``copy``: initial value, writers (as offsets in
         the copy; None when one is outside it) and who read its chain last (0: nobody, 1: the
         copy, 2: another run)."""
-        facts, owner, writers = self.enc.facts, self.owner, self.enc.bool_writers
+        facts, writers = self.enc.facts, self.enc.bool_writers
         start, size = copy.start, copy.group.size
         out: list[Any] = []
         for atom in atoms:
@@ -324,18 +329,20 @@ class CopyReplay:
             if written:  # in vertex order: inside the copy when the first and the last are
                 inside = start <= written[0][0] and written[-1][0] < start + size
                 offsets = tuple((d - start, value) for d, value in written) if inside else None
-            status = 0 if atom not in owner else 1 if owner[atom] == start else 2
-            out.append((facts.get(atom), offsets, status))
+            out.append((facts.get(atom), offsets, self._status(atom, start)))
         return out
 
     def _numeric_class(self, copy: _Copy, atoms: list[AtomKey]) -> list[Any]:
         """What the world says of numeric ``atoms``: initial value, whether anything writes
         them (a run that reads a written one is not kept: its chain is numeric) and who read
         its chain last."""
-        values, owner, writers = self.enc.values, self.owner, self.enc.num_writers
-        start = copy.start
-        return [(values.get(atom), bool(writers.get(atom)), 0 if atom not in owner else 1 if owner[atom] == start else 2)
-                for atom in atoms]
+        values, writers = self.enc.values, self.enc.num_writers
+        return [(values.get(atom), bool(writers.get(atom)), self._status(atom, copy.start)) for atom in atoms]
+
+    def _status(self, atom: AtomKey, start: int) -> int:
+        """Who read the chain of ``atom`` last: 0 nobody, 1 the copy at ``start``, 2 another run."""
+        owner = self.owner.get(atom, _NOBODY)
+        return 0 if owner is _NOBODY else 1 if owner == start else 2
 
     def _may_check(self, v: int) -> bool:
         """Whether vertex ``v`` can have achieve conditions (by its structure alone, which the
@@ -347,16 +354,22 @@ class CopyReplay:
 
 
 # --- templates ---------------------------------------------------------------------------------------
+def _first_places(values: list[str]) -> dict[str, int]:
+    """Where each value first appears among ``values``."""
+    first: dict[str, int] = {}
+    for i, v in enumerate(values):
+        first.setdefault(v, i)
+    return first
+
+
 def _pattern(values: list[str]) -> list[int]:
     """Where each value first appears: two copies with one pattern are renamings of each other."""
-    first: dict[str, int] = {}
-    return [first.setdefault(v, i) for i, v in enumerate(values)]
+    first = _first_places(values)
+    return [first[v] for v in values]
 
 
 def _templates_of(atoms: list[AtomKey], values: list[str]) -> list[Template]:
-    place: dict[str, int] = {}
-    for i, v in enumerate(values):
-        place.setdefault(v, i)
+    place = _first_places(values)
     try:
         return [(predicate, tuple(place[a] for a in args)) for predicate, args in atoms]
     except KeyError:
