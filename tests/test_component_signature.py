@@ -11,7 +11,7 @@ def _numeric_component(bm: BoolModel, span: int, bound: int) -> Component:
     a, b = bm.new_bool("a"), bm.new_bool("b")
     bm.records.append(Exactly((a, b), TRUE))
     value = bm.new_int("value", -span, span)
-    bm.records.append(ValueAfter(a, TRUE, value, None, 0, 3, NumericEffectKind.ASSIGN))
+    bm.records.append(ValueAfter(a, value, None, 0, 3, NumericEffectKind.ASSIGN))
     holds = bm.new_bool("holds")
     bm.records.append(Compare(holds, value, ">", bound))
     return Component(bm.records[-3:], [a, b])

@@ -203,7 +203,8 @@ def _actions(mission: Mission, task: str) -> list[tuple[str, ...]]:
 def test_every_numeric_precondition_must_hold_in_path_generation(tmp_path):
     """After `count-objects` assigns level 2, `pick-exactly-five` requires `(= (level ?rm) 5)`,
     which fails, and then `(> (level ?rm) 0)`, which holds. The original overwrites the
-    executable flag with the last comparison and keeps the path; it is not executable."""
+    executable flag with the last comparison and keeps the path; it is not executable, so it
+    stays listed with the original's number (|1) and is part of no valid mission decomposition."""
     folder = _picking(tmp_path, """
     (:method count-then-pick-five
         :parameters (?r - robot ?rm - room)
@@ -229,9 +230,10 @@ def test_every_numeric_precondition_must_hold_in_path_generation(tmp_path):
         :precondition (and (> (level ?rm) 0))
         :effect (and (decrease (level ?rm) 1)))""", {"RoomA": 2, "RoomB": 3})
     mission = Mission.load(*find_mission_files(folder))
-    assert _actions(mission, "PickObject") == [("count-objects", "pick-any")]
+    assert _actions(mission, "PickObject") == [("count-objects", "pick-exactly-five"), ("count-objects", "pick-any")]
+    assert [bool(p.never_valid) for p in mission.paths["PickObject"]] == [True, False]
     exploratory, cpsat = _both(folder)
-    assert exploratory == cpsat == {frozenset({"AT1_1|1", "AT1_2|1"})}
+    assert exploratory == cpsat == {frozenset({"AT1_1|2", "AT1_2|2"})}
 
 
 def test_every_numeric_precondition_must_hold_in_unique_branch(tmp_path):

@@ -13,6 +13,7 @@ from mutrose_cp.htn import (
     Step,
     TreeNode,
     expand_path,
+    repetitions,
     ground_path,
     task_paths,
 )
@@ -111,7 +112,9 @@ def test_methods_give_paths_in_declaration_order_with_preconditions_as_a_first_s
     assert len(mopping.steps) == 2 and len(sweeping.steps) == 2
 
 
-def test_method_whose_preconditions_contradict_each_other_yields_no_path():
+def test_method_whose_preconditions_contradict_each_other_is_never_valid():
+    """The original lists such paths (it evaluates each assumed precondition alone), so they
+    keep their numbers, marked never valid."""
     domain = _domain("""
   (:task Clean :parameters (?r - robot ?rm - room))
   (:method never :parameters (?r - robot ?rm - room) :task (Clean ?r ?rm)
@@ -125,8 +128,10 @@ def test_method_whose_preconditions_contradict_each_other_yields_no_path():
       :ordered-subtasks (and (report ?r ?rm)))
 """)
     paths = task_paths(domain, "Clean")
-    assert [p.tree.children[0].name for p in paths] == ["fine"]
-    assert _names(paths[0]) == ["report"]
+    assert [p.tree.children[0].name for p in paths] == ["never", "never-numeric", "fine"]
+    assert [p.never_valid for p in paths] == [("it requires not open(?rm) and its negation",),
+                                              ("it requires two values of objects(?rm)",), ()]
+    assert _names(paths[2]) == ["report"]
 
 
 def test_subtask_without_any_path_makes_the_enclosing_method_inapplicable():
@@ -141,9 +146,14 @@ def test_subtask_without_any_path_makes_the_enclosing_method_inapplicable():
       :precondition (and (clean ?rm) (not (clean ?rm)))
       :ordered-subtasks (and (report ?r ?rm)))
 """)
-    assert task_paths(domain, "Impossible") == []
-    # the first method is not kept with its impossible subtask left out
-    assert [p.tree.children[0].name for p in task_paths(domain, "Clean")] == ["clean-only"]
+    [impossible] = task_paths(domain, "Impossible")
+    assert impossible.never_valid == ("it requires not clean(?rm) and its negation",)
+    # after mop (clean ?rm) holds, and the subtask has no path at all there: the first method
+    # keeps its number (the original leaves the subtask out), never valid
+    paths = task_paths(domain, "Clean")
+    assert [p.tree.children[0].name for p in paths] == ["clean-then-impossible", "clean-only"]
+    assert [p.never_valid for p in paths] == [("its subtask Impossible has no executable method",), ()]
+    assert _names(paths[0]) == ["mop"]
 
 
 def test_nested_task_paths_combine_with_the_first_subtask_varying_fastest():
@@ -204,13 +214,32 @@ def test_guarded_recursive_method_is_unrolled_once_with_a_fragment_to_expand():
 def test_fragment_is_repeated_as_often_as_the_world_value_allows():
     multiple, _ = task_paths(_domain(RECURSIVE), "PickAll")
     values = {("objects", ("RoomA",)): 6}
-    expanded = expand_path(multiple, {"?r": "r1", "?rm": "RoomA"}, lambda f, a: values.get((f, a)), "AT1_1|1")
-    # (6 - 1) // 1 - 1 = 4 more repetitions of [guard, pick]: six picks empty the room
-    assert _names(expanded) == ["pick"] * 6 and not expanded.needs_expansion
+    warnings: list[str] = []
+    expanded = expand_path(multiple, {"?r": "r1", "?rm": "RoomA"}, lambda f, a: values.get((f, a)), "AT1_1|1",
+                           warnings.append)
+    # ceil((6 - 1) / 1) - 1 = 4 more repetitions of [guard, pick]: six picks empty the room
+    assert _names(expanded) == ["pick"] * 6 and not expanded.needs_expansion and not warnings
     ground = ground_path(expanded, {"?r": "r1", "?rm": "RoomA"})
     assert ground.numeric_effects == (("objects", ("RoomA",), "increase", -6),)
-    with pytest.raises(MissionError, match=r"the world gives no value for objects\(RoomA\)"):
-        expand_path(multiple, {"?r": "r1", "?rm": "RoomA"}, lambda f, a: None, "AT1_1|1")
+    # a bound the world does not give: one unrolling, as the original, and a warning naming it
+    once = expand_path(multiple, {"?r": "r1", "?rm": "RoomA"}, lambda f, a: None, "AT1_1|1", warnings.append)
+    assert _names(once) == ["pick", "pick"] and not once.needs_expansion
+    assert len(warnings) == 1 and "no value for objects(RoomA), which bounds a recursive method" in warnings[0]
+
+
+@pytest.mark.parametrize(("value", "bound", "step", "runs"), [
+    (6, 1, 1, 5), (4.0, 1, 1, 3), (4, 1, 1, 3), (3.5, 1, 1, 3), (6, 1, 2, 3), (7, 1, 2, 3), (7.5, 1, 2, 4),
+    (1, 1, 1, 0), (0, 1, 1, 0), (2, 1.5, 0.5, 1), (10, 0, 3, 4), (0.3, 0.1, 0.1, 2)])
+def test_repetitions_run_the_fragment_while_the_guard_holds(value, bound, step, runs):
+    """The fragment runs once per value above the bound, counting down by the step: the
+    original's formulas give 4 runs for 4.0 (4 picks beside 3, the mission fails) and 2 for
+    (6, 1, 2), whose third value (2) is still above the bound."""
+    fragment = Fragment(0, 1, "objects", ("?rm",), bound, -step)
+    assert repetitions(value, fragment) == runs - 1 if runs else repetitions(value, fragment) <= -1
+    brute, v = 0, value
+    while v > bound:
+        brute, v = brute + 1, v - step
+    assert brute == runs
 
 
 def test_unguarded_recursion_is_cut_at_the_depth_limit():

@@ -12,7 +12,9 @@ from mutrose_cp.model import Comparison, Domain, Literal, NumericEffect, Paramet
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = Path(os.environ.get("MUTROSE_REFERENCE", REPO_ROOT / ".." / "shared" / "reference"))
-CORPUS = sorted(REFERENCE.glob("**/*.hddl")) if REFERENCE.is_dir() else []
+# every domain of the corpus but the broken copies that show the original's error messages
+ERROR_CASES = REFERENCE / "console" / "errors"
+CORPUS = sorted(p for p in REFERENCE.glob("**/*.hddl") if ERROR_CASES not in p.parents) if REFERENCE.is_dir() else []
 
 
 def _reference(relative: str) -> Path:

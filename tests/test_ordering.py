@@ -81,9 +81,10 @@ def test_effects_follow_the_sequence_constraints_after_trimming(tmp_path, capsys
     assert "AT3_1" in capsys.readouterr().err
 
 
-def test_a_method_that_contradicts_itself_yields_no_path(tmp_path):
+def test_a_method_that_contradicts_itself_is_never_valid(tmp_path):
     """A method requiring (lit ?rm) and (not (lit ?rm)) can never be applied: only the other
-    method of the task gives a decomposition, in both algorithms and whatever the world says."""
+    method of the task gives a valid decomposition, in both algorithms and whatever the world
+    says.  The original lists the contradictory path (|1), and so it stays, with its number."""
     contradictory = Method("impossible", (Lit("lit", "?rm"), Lit("lit", "?rm", False)), ("wait-here",))
     duplicate = Method("doubled", (Lit("sealed", "?rm"), Lit("sealed", "?rm")), ("switch-on",))
     tasks = (Task("Prepare", (contradictory, duplicate)),)
@@ -91,8 +92,9 @@ def test_a_method_that_contradicts_itself_yields_no_path(tmp_path):
     for lit in (None, True, False):
         mission, exploratory, cpsat = _solve(_spec(tree, tasks=tasks, lit=lit), tmp_path / str(lit))
         paths = mission.paths["Prepare"]
-        assert [[s.name for s in p.actions] for p in paths] == [["switch-on"]]
-        assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1"}]
+        assert [[s.name for s in p.actions] for p in paths] == [["wait-here"], ["switch-on"]]
+        assert [bool(p.never_valid) for p in paths] == [True, False]
+        assert exploratory == cpsat == [{"AT1_1|2", "AT2_1|2"}]
 
 
 def test_effects_printed_in_declaration_order(tmp_path):
@@ -174,14 +176,17 @@ def test_unique_branch_decomposition_meets_the_achieve_condition(tmp_path):
 
 def test_a_subtask_without_executable_method_makes_its_method_inapplicable(tmp_path):
     """Prepare's first method calls Inspect, whose only method can never run: the original drops
-    the subtask and keeps [wait-here] as a decomposition that skips the inspection."""
+    the subtask and keeps [wait-here] as a decomposition that skips the inspection.  It stays
+    listed with the original's number (|1), and is never valid."""
     inspect = Task("Inspect", (Method("inspect-lit", (Lit("lit", "?rm", False),), ("inspect-lit",)),))
     prepare = Task("Prepare", (Method("with-inspection", (), ("Inspect", "wait-here")),
                                Method("light-only", (), ("switch-on",))))
     tree = GoalNode((TaskNode("Prepare"), TaskNode("Wait")), annotation=("flat", ";"))
     mission, exploratory, cpsat = _solve(_spec(tree, tasks=(inspect, prepare) + TASKS), tmp_path)
-    assert [[s.name for s in p.actions] for p in mission.paths["Prepare"]] == [["switch-on"]]
-    assert exploratory == cpsat == [{"AT1_1|1", "AT2_1|1"}]
+    paths = mission.paths["Prepare"]
+    assert [[s.name for s in p.actions] for p in paths] == [["wait-here"], ["switch-on"]]
+    assert paths[0].never_valid == ("its subtask Inspect has no executable method",) and not paths[1].never_valid
+    assert exploratory == cpsat == [{"AT1_1|2", "AT2_1|1"}]
 
 
 def _with_level(tree: GoalNode, tasks, actions, level: int) -> MissionSpec:

@@ -24,6 +24,7 @@ from mutrose_cp.model.task_graph import (
     TaskGraphBuilder,
     TaskVertex,
 )
+from mutrose_cp.solve.numeric import StartCondition
 from mutrose_cp.solve.semantics import (
     ConstraintIndex,
     EffectScopes,
@@ -122,7 +123,13 @@ def test_numeric_effects_assign_or_add():
     state.apply(Effects((), ((("f", ("x",)), "assign", 1.0),), ()))
     assert state.value("f", ("x",)) == 1.0
     state.apply(Effects((), ((("g", ("x",)), "increase", 3.0),), ()))
-    assert state.value("g", ("x",)) == 3.0  # an unknown value starts from the amount
+    state.apply(Effects((), ((("g", ("x",)), "increase", -1.0),), ()))
+    # an unknown value stays unknown, two more than where it started
+    assert state.value("g", ("x",)) is None and state.offsets == {("g", ("x",)): 2.0}
+    assert state.start_condition(("g", ("x",)), ">", 0, "") == StartCondition(">", -2000)
+    assert state.start_condition(("f", ("x",)), ">", 0, "") is None  # known
+    state.apply(Effects((), ((("g", ("x",)), "assign", 4.0),), ()))
+    assert state.value("g", ("x",)) == 4.0 and not state.offsets
 
 
 def test_effects_of_splits_ground_and_free_effects():

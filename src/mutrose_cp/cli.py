@@ -393,9 +393,15 @@ def cmd_graph(args: argparse.Namespace) -> int:
 
 
 def _warn(args: argparse.Namespace, mission: Mission) -> None:
+    """The warnings of loading now, and those of later stages as they are found."""
     if not getattr(args, "quiet", False):
         for w in (*mission.warnings, *mission.initial_state.warnings):
             print(f"warning: {w}", file=sys.stderr)
+        mission.report_warning = _print_warning
+
+
+def _print_warning(warning: str) -> None:
+    print(f"warning: {warning}", file=sys.stderr)
 
 
 def _refuse_inputs_as_output(outputs: Sequence[Path | str | None], mission: Mission,

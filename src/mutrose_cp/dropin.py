@@ -131,6 +131,7 @@ def run(inv: Invocation, out: IO[str] | None = None) -> int:
     mission = Mission.load(hddl, gm, cfg, lenient_xml=True)  # the original repairs XML silently
     for warning in (*mission.warnings, *mission.initial_state.warnings):
         print(f"warning: {warning}", file=sys.stderr)
+    mission.report_warning = lambda warning: print(f"warning: {warning}", file=sys.stderr)
     # the original would overwrite an input named as its output: refused, before any work
     refuse_unsafe_outputs((None if inv.ihtn else mission.output_path(),), (*inv.files, mission.world_path))
     with phase("expanding the mission"):

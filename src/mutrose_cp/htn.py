@@ -12,7 +12,9 @@ the decomposition has once the instance's variables are bound.
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass, field
+from fractions import Fraction
 from functools import cached_property
 from typing import Callable, Mapping, Sequence
 
@@ -75,6 +77,11 @@ class DecompositionPath:
     steps: tuple[Step, ...]
     tree: TreeNode  # the root task node with its chosen method subtree
     fragments: tuple[Fragment, ...] = ()  # recursive-method fragments to expand (§7.6)
+    # why the path can never run, where the original lists it all the same (a step whose
+    # preconditions contradict each other or fail where the original's check lets them pass, a
+    # subtask without an executable method): kept so that decomposition numbers stay the
+    # original's, and never part of a valid mission decomposition (docs/deviations.md)
+    never_valid: tuple[str, ...] = ()
 
     @property
     def needs_expansion(self) -> bool:
@@ -228,15 +235,17 @@ class _State:
         return _State(dict(self.facts), dict(self.values))
 
     def apply(self, step: Step) -> None:
+        """The step's effects.  An increase or decrease of a value the state does not know
+        leaves it unknown (the original takes the amount as the value, as if it had been 0,
+        and drops the paths whose later comparisons that 0 refutes; docs/deviations.md)."""
         for e in step.effects:
             self.facts[(e.predicate, e.args)] = e.positive
         for ne in step.numeric_effects:
             key = (ne.function, ne.args)
             if ne.kind == "assign":
                 self.values[key] = ne.amount
-            else:
-                delta = ne.amount if ne.kind == "increase" else -ne.amount
-                self.values[key] = self.values[key] + delta if key in self.values else delta
+            elif key in self.values:
+                self.values[key] += ne.amount if ne.kind == "increase" else -ne.amount
 
 
 def _rename(args: Sequence[str], mapping: Mapping[str, str]) -> tuple[str, ...]:
@@ -268,23 +277,31 @@ class _Partial:
     steps: list[Step]
     trees: list[TreeNode]
     fragments: list[Fragment] = field(default_factory=list)
+    never_valid: list[str] = field(default_factory=list)
 
     def then(self, other: "_Partial") -> "_Partial":
         """This path followed by ``other`` (whose fragment indices shift)."""
         n = len(self.steps)
         shifted = [Fragment(f.start + n, f.end + n, f.function, f.args, f.bound, f.decrease) for f in other.fragments]
-        return _Partial(self.steps + other.steps, self.trees + other.trees, self.fragments + shifted)
+        return _Partial(self.steps + other.steps, self.trees + other.trees, self.fragments + shifted,
+                        self.never_valid + other.never_valid)
 
 
 @dataclass
 class _Checked:
     """What checking a primitive step against the symbolic state found (§2.4).
 
-    ``facts`` and ``values`` are the unknown facts and function values the step needs, to be
-    assumed true of the state; ``guards`` are the ``>`` comparisons among them, with their
-    declared bound, which mark a recursive method's guard."""
+    ``executable`` is the original's verdict, which decides whether the path exists (and so the
+    decomposition numbers); ``broken`` says why the step can never run where that verdict lets
+    it pass: a numeric comparison that holds overwrites an earlier failure there (fix 12), and
+    a step may require a fact and its negation, or two values of one function.  ``facts`` and
+    ``values`` are the unknown facts and function values the step needs, to be assumed true of
+    the state (the first assumption of an atom wins, as the original's first matching entry);
+    ``guards`` are the ``>`` comparisons among them, with their declared bound, which mark a
+    recursive method's guard."""
 
     executable: bool = True
+    broken: list[str] = field(default_factory=list)
     facts: list[tuple[_Atom, bool]] = field(default_factory=list)
     values: list[tuple[_Atom, Number]] = field(default_factory=list)
     equals: list[tuple[_Atom, Number]] = field(default_factory=list)  # the "=" preconditions assumed so far
@@ -307,7 +324,7 @@ def _combine(child_lists: list[list[_Partial]]) -> list[_Partial]:
     combined: list[_Partial] = []
     for lst in child_lists:
         if not combined:
-            combined = [_Partial(list(p.steps), list(p.trees), list(p.fragments)) for p in lst]
+            combined = [_Partial(list(p.steps), list(p.trees), list(p.fragments), list(p.never_valid)) for p in lst]
             continue
         combined = [p.then(q) for q in lst for p in combined]
     return combined or [_Partial([], [])]
@@ -343,7 +360,7 @@ class _PathGenerator:
             for partial in self.method_paths(mid, state.copy(), m_map, depth):
                 method_node = TreeNode("method", method.name, method_node_args, tuple(partial.trees))
                 out.append(_Partial(partial.steps, [TreeNode("task", task.name, task_node_args, (method_node,))],
-                                    partial.fragments))
+                                    partial.fragments, partial.never_valid))
         return out
 
     def _method_mapping(self, task: AbstractTask, method: Method, mapping: dict[str, str]) -> dict[str, str]:
@@ -376,37 +393,42 @@ class _PathGenerator:
                         recursive: bool) -> list[_Partial]:
         """The paths of one linearisation ``order`` of method ``m``, run from ``state``.
 
-        Empty when a primitive step cannot execute; empty too when an abstract subtask has no
-        path, though its later siblings are still generated (so their errors are reported)."""
+        Empty when a primitive step cannot execute by the original's check.  An abstract subtask
+        without a path is left out, as by the original, and the paths that skip it are marked
+        never valid: they skip work the domain requires (fix 15, docs/deviations.md)."""
         child_lists: list[list[_Partial]] = []
         fragments: list[Fragment] = []
+        broken: list[str] = []
         for k, idx in enumerate(order):
             vid, args, _sid = m.children[idx]
             child = self.tdg.vertices[vid]
             if child.kind != "primitive":
                 callee = self.domain.task_by_name[child.name]
                 nu = {p.name: mu[a] for p, a in zip(callee.parameters, args) if a in mu}
-                child_lists.append(self.task_paths(vid, state, nu, depth + 1))
+                paths = self.task_paths(vid, state, nu, depth + 1)
+                if paths:
+                    child_lists.append(paths)
+                else:
+                    broken.append(f"its subtask {child.name} has no executable method")
                 continue
             step = self._step(child, args, mu)
             later = self._later_steps(m, order[k + 1:], mu)
-            checked = self._check(step, state, later)
+            checked = self._check(step, state, later, guard=step.pseudo and recursive)
             if not checked.executable:
                 return []
-            state.facts.update(checked.facts)
-            state.values.update(checked.values)
+            broken += checked.broken
+            for key, positive in checked.facts:
+                state.facts.setdefault(key, positive)
+            for key, value in checked.values:
+                state.values.setdefault(key, value)
             if step.pseudo and recursive:
                 fragments += self._fragments(m, checked.guards, later)
             state.apply(step)
             child_lists.append([_Partial([step], [] if step.pseudo else [TreeNode("action", step.name, step.args)])])
-        if any(not lst for lst in child_lists):
-            # an abstract subtask without an executable method makes this ordering
-            # inapplicable; the original drops the subtask and keeps the rest of the method,
-            # a decomposition that skips required work (docs/deviations.md)
-            return []
         combined = _combine(child_lists)
         for p in combined:
             p.fragments = fragments + p.fragments
+            p.never_valid = broken + p.never_valid
         return combined
 
     def _fragments(self, m: _Vertex, guards: list[tuple[_Atom, Number]], later: list[Step]) -> list[Fragment]:
@@ -430,20 +452,25 @@ class _PathGenerator:
             out.append(Fragment(0, len(m.children) - 2, key[0], key[1], bound, delta))
         return out
 
-    def _check(self, step: Step, state: _State, later: list[Step]) -> _Checked:
+    def _check(self, step: Step, state: _State, later: list[Step], guard: bool) -> _Checked:
         """Check a primitive step's preconditions against ``state``.
 
-        Every precondition must hold: the original lets a later numeric comparison that holds
-        overwrite an earlier failure, which no reference output depends on (docs/deviations.md);
-        the ``not`` of a comparison is ignored, as in the original.  Unknown facts are assumed;
-        a ``>`` guard is assumed at ``N - sum of later decrements`` so that a recursive method
-        runs once more and then stops."""
+        The original lets a numeric comparison that holds overwrite an earlier failure; every
+        precondition must hold for the step to run, so such a step is kept (its path keeps its
+        number) and marked (docs/deviations.md, fix 12).  The ``not`` of a comparison is
+        ignored, as in the original.  Unknown facts are assumed, and so are ``=`` values (the
+        value is then pinned there); a recursive method's ``>`` ``guard`` is assumed at ``N -
+        sum of later decrements``, so that the method runs once more and then stops.  Any other
+        ``>`` on an unknown value leaves it unknown: the original assumes that value there too,
+        and drops the paths whose later comparisons it refutes (docs/deviations.md, fix 25)."""
         checked = _Checked()
         for c in step.preconditions:
             if isinstance(c, Literal):
                 _check_literal(c, state, checked)
             else:
-                _check_comparison(c, state, later, checked)
+                _check_comparison(c, state, later, checked, guard)
+        if checked.broken and not step.pseudo:
+            checked.broken = [f"{reason} in action {step.name}" for reason in checked.broken]
         return checked
 
     def _step(self, vertex: _Vertex, args: tuple[str, ...], mu: dict[str, str]) -> Step:
@@ -464,29 +491,43 @@ class _PathGenerator:
         return out
 
 
+def _shown(c: Literal | Comparison) -> str:
+    if isinstance(c, Literal):
+        return f"{'' if c.positive else 'not '}{c.predicate}({', '.join(c.args)})"
+    return f"{c.function}({', '.join(c.args)}) {c.op} {c.value}"
+
+
 def _check_literal(c: Literal, state: _State, checked: _Checked) -> None:
-    """A boolean precondition holds if the state agrees or does not know (then it is assumed)."""
+    """A boolean precondition holds if the state agrees or does not know (then it is assumed).
+
+    A failure stops the step, unless a later numeric comparison overwrites it (the original's
+    verdict); a step that requires a fact and its negation runs there, and never can."""
     key = (c.predicate, c.args)
     if key in state.facts:
         if state.facts[key] != c.positive:
             checked.executable = False
+            checked.broken.append(f"precondition {_shown(c)} is false after the steps before it")
     elif (key, not c.positive) in checked.facts:
-        checked.executable = False  # the step requires a fact and its negation: never executable
+        checked.broken.append(f"it requires {_shown(c)} and its negation")
     else:
         checked.facts.append((key, c.positive))
 
 
-def _check_comparison(c: Comparison, state: _State, later: list[Step], checked: _Checked) -> None:
-    """A numeric precondition is compared with a known value, else assumed (see ``_check``)."""
+def _check_comparison(c: Comparison, state: _State, later: list[Step], checked: _Checked, guard: bool) -> None:
+    """A numeric precondition is compared with a known value, its verdict overwriting the
+    step's (the original's), else assumed (see ``_check``)."""
     key = (c.function, c.args)
     if key in state.values:
-        checked.executable = checked.executable and compare(state.values[key], c.op, c.value)
+        checked.executable = compare(state.values[key], c.op, c.value)
+        if not checked.executable:
+            checked.broken.append(f"precondition {_shown(c)} is false after the steps before it")
     elif c.op == ">":
-        checked.values.append((key, c.value - _net_change(key, later)))
-        checked.guards.append((key, c.value))
+        if guard:
+            checked.values.append((key, c.value - _net_change(key, later)))
+            checked.guards.append((key, c.value))
     else:
         if any(k == key and v != c.value for k, v in checked.equals):
-            checked.executable = False  # the step requires two different values of one function
+            checked.broken.append(f"it requires two values of {c.function}({', '.join(c.args)})")
         checked.equals.append((key, c.value))
         checked.values.append((key, c.value))
 
@@ -498,7 +539,8 @@ def task_paths(domain: Domain, task: str) -> list[DecompositionPath]:
     root = domain.task_by_name[task]
     identity = {p.name: p.name for p in root.parameters}
     return [
-        DecompositionPath(tuple(p.steps), p.trees[0], tuple(sorted(p.fragments, key=lambda f: f.start)))
+        DecompositionPath(tuple(p.steps), p.trees[0], tuple(sorted(p.fragments, key=lambda f: f.start)),
+                          tuple(dict.fromkeys(p.never_valid)))
         for p in gen.task_paths(tdg.root.id, _State(), identity, 0)
     ]
 
@@ -658,21 +700,35 @@ def ground_path(path: DecompositionPath, binding: Mapping[str, Value]) -> Ground
     """Instantiate a path with an instance's parameter values (root parameter -> value).  A
     path without conditions or effects (a third of vital signs' 950,000 decompositions at
     50,000 rooms) shares one empty record: it is frozen."""
-    if path.bare:
+    if path.bare and not path.never_valid:
         return _NO_PREDICATES
     grounder = _Grounder(binding)
+    grounder.unsatisfiable.extend(path.never_valid)
     for step in path.steps:
         grounder.step(step)
     return grounder.result()
 
 
+def repetitions(value: Number, fragment: Fragment) -> int:
+    """How many more times ``fragment`` runs after the one the path holds, from ``value``: the
+    guard ``f > N`` holds at ``value - j*d`` for j = 0, 1, ... while ``j < (value - N) / d``,
+    so the fragment runs ``ceil((value - N) / d)`` times in all.  Exact for integer and decimal
+    world values and any step ``d`` (the original's formulas are short by one for a decimal
+    value such as 4.0, and when ``d`` does not divide ``value - N``; docs/deviations.md)."""
+    distance = Fraction(str(value)) - Fraction(str(fragment.bound))
+    runs = math.ceil(distance / Fraction(str(-fragment.decrease)))
+    return max(runs, 0) - 1
+
+
 def expand_path(path: DecompositionPath, binding: Mapping[str, Value],
-                value_of: Callable[[str, tuple[str, ...]], Number | None], where: str) -> DecompositionPath:
+                value_of: Callable[[str, tuple[str, ...]], Number | None], where: str,
+                warn: Callable[[str], None]) -> DecompositionPath:
     """Repeat the recursive fragments of ``path`` as often as the world allows (§7.6).
 
     ``value_of(function, args)`` gives the function's value (None if unknown).  For the guard
     ``f > N`` with a decrease ``d`` per repetition and a current value ``v``, the fragment is
-    inserted ``k`` more times after itself, with k as the original computes it."""
+    inserted after itself as often as :func:`repetitions` says.  A guard the world gives no
+    value for keeps the path's one unrolling, as the original, and ``warn`` says so."""
     steps = list(path.steps)
     offset = 0
     for frag in path.fragments:
@@ -682,20 +738,13 @@ def expand_path(path: DecompositionPath, binding: Mapping[str, Value],
                                f"({frag.function} {' '.join(frag.args)})", where)
         v = value_of(frag.function, grounds[0])
         if v is None:
-            raise MissionError(f"Failed to expand decomposition [{where}]: the world gives no value for "
-                               f"{frag.function}({', '.join(grounds[0])}), which controls a recursive method", where)
-        n = frag.bound
-        if isinstance(v, int) and isinstance(n, int):
-            k = (v - n) // int(-frag.decrease) - 1
-        elif isinstance(v, int):
-            k = v - (int(n) + 1) - 1
-        elif isinstance(n, int):
-            k = (int(v) + 1) - n - 1
-        else:
-            k = int(v - n) + 1 - 1
+            warn(f"decomposition {where}: the world gives no value for {frag.function}({', '.join(grounds[0])}), "
+                 "which bounds a recursive method, so its recursion is unrolled once, as the original does")
+            continue
+        k = repetitions(v, frag)
         start, end = frag.start + offset, frag.end + offset
         block = steps[start:end + 1]
         if k > 0:
             steps[end + 1:end + 1] = block * k
             offset += len(block) * k
-    return DecompositionPath(tuple(steps), path.tree, ())
+    return DecompositionPath(tuple(steps), path.tree, (), path.never_valid)

@@ -171,6 +171,9 @@ class Mission:
     world_path: Path | None = None  # the world knowledge file the configuration named
     # optional progress reporter for long stages: called with (stage, done, total)
     progress: Callable[[str, int, int], None] | None = None
+    # where a warning found by a later stage goes as it is found (the loaders' are in
+    # ``warnings`` before any stage runs; a later one is added there too)
+    report_warning: Callable[[str], None] | None = None
 
     @classmethod
     def load(cls, hddl: str | os.PathLike[str], gm: str | os.PathLike[str], config: str | os.PathLike[str], *,
@@ -237,7 +240,12 @@ class Mission:
     @cached_property
     @_deep
     def task_graph(self) -> TaskGraph:
-        return build_task_graph(self.expansion, self.goal_model, self.config, self.initial_state, self.paths)
+        graph = build_task_graph(self.expansion, self.goal_model, self.config, self.initial_state, self.paths)
+        for warning in graph.warnings:
+            self.warnings.append(warning)
+            if self.report_warning is not None:
+                self.report_warning(warning)
+        return graph
 
     @cached_property
     @_deep

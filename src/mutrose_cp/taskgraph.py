@@ -443,7 +443,7 @@ def _stamped(builder: _Builder, plan: StampingPlan) -> TaskGraph | None:
 
 def _connected(builder: _Builder) -> tuple[TaskGraphBuilder, _Trimmer | None]:
     """The graph of ``builder`` with its context dependencies and execution constraints, trimmed
-    (§5.5) with the trimmer that did it; a unique-branch graph is neither trimmed nor expanded
+    (§5.5) with the trimmer that did it; a unique-branch graph is not trimmed
     (§7.7), and comes with None.  The walk's state at the first vertex of each forAll copy
     built goes to ``builder.copy_states``."""
     tg, cd_edges = builder.build()
@@ -451,12 +451,13 @@ def _connected(builder: _Builder) -> tuple[TaskGraphBuilder, _Trimmer | None]:
         raise MissionError("the mission has no task: every branch was removed or no task instance exists",
                            builder.gm.source)
     _final_context_edges(tg, cd_edges)
+    _expand_recursions(tg, builder.state)
     if _is_unique_branch(tg):
         _execution_constraint_edges(tg)
         return tg, None
-    _expand_recursions(tg, builder.state)
     trimmer = _Trimmer(tg)
     trimmed = trimmer.trim()
+    trimmed.warnings = tg.warnings
     tg.release_lookups()  # the walk reads the untrimmed vertices and successors while the trimmed graph fills
     builder.copy_states = _execution_constraint_edges(tg, trimmer.link_kept,
                                                       {start for start, _ in builder.copy_ranges.values()})
@@ -464,7 +465,9 @@ def _connected(builder: _Builder) -> tuple[TaskGraphBuilder, _Trimmer | None]:
 
 
 def _expand_recursions(tg: TaskGraphBuilder, state: InitialState) -> None:
-    """Unroll recursive methods as often as the initial world state asks (§7.6).
+    """Unroll recursive methods as often as the initial world state asks (§7.6), in every
+    kind of mission: the original skips unique-branch missions, where a recursion then runs
+    once whatever the world holds (docs/deviations.md, fix 23).
 
     The original computes the repetitions from the world state at the point where the
     decomposition is accepted; here the initial state is used, so that the decomposition does
@@ -474,6 +477,6 @@ def _expand_recursions(tg: TaskGraphBuilder, state: InitialState) -> None:
         if not dec.path.needs_expansion:
             continue
         binding = dec.instance.binding
-        path = expand_path(dec.path, binding, state.function_value, dec.id)
+        path = expand_path(dec.path, binding, state.function_value, dec.id, tg.warnings.append)
         tg.replace(replace(v, decomposition=Decomposition(dec.id, dec.instance, dec.number, path,
                                                           ground_path(path, binding))))

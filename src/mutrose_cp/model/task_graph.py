@@ -340,6 +340,8 @@ class TaskGraph(_Adjacency):
     # the forAll copies stamped from another (mutrose_cp.stamping), by forAll, in vertex order:
     # later stages may stamp what they make of a copy from what they make of its source
     stamped_copies: tuple[tuple[StampedCopy, ...], ...] = field(default=(), compare=False)
+    # doubts met while building it: a recursion whose bound the world does not give
+    warnings: tuple[str, ...] = field(default=(), compare=False)
 
     @cached_property
     def _decomposition_vertices(self) -> tuple[DecompositionVertex, ...]:
@@ -376,6 +378,7 @@ class TaskGraphBuilder(_Adjacency):
         self._edges = _EdgeIndex()
         self.achieve_carried: dict[int, list[ScopeVertex]] = {}
         self.stamped_copies: list[tuple[StampedCopy, ...]] = []
+        self.warnings: list[str] = []  # what building the graph found doubtful (an unknown recursion bound)
         self._partners: dict[tuple[int, bool, bool], ExecutionPartner] = {}
 
     @property
@@ -520,4 +523,4 @@ class TaskGraphBuilder(_Adjacency):
                 edges.successors[v] = same
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()},
-                         stamped_copies=tuple(self.stamped_copies))
+                         stamped_copies=tuple(self.stamped_copies), warnings=tuple(self.warnings))

@@ -42,6 +42,7 @@ class RecordKind(StrEnum):
     OR = "or_eq"
     VALUE_AFTER = "int_sel"
     COMPARE = "cmp_eq"
+    DIFFERENCE = "int_sub"
 
 
 class NumericEffectKind(StrEnum):
@@ -104,13 +105,13 @@ class OrOf(_Definition):
 @dataclass(frozen=True, slots=True)
 class ValueAfter:
     """Integer ``target`` is a numeric atom's value after one writer: if ``writer`` is chosen,
-    the value it assigns, or the value before plus ``amount`` (just ``amount`` when the value
-    before is unknown, ``known`` false); otherwise the value before.  The value before is the
-    integer variable ``previous``, or the constant ``previous_value`` for the first writer."""
+    the value it assigns, or the value before plus ``amount``; otherwise the value before.  The
+    value before is the integer variable ``previous``, or the constant ``previous_value`` for
+    the first writer.  (Of a value the world does not give, the chain holds the offset that
+    the increases add to it, from 0, until an assignment.)"""
 
     kind: ClassVar[RecordKind] = RecordKind.VALUE_AFTER
     writer: Lit
-    known: Lit
     target: int
     previous: int | None
     previous_value: int
@@ -119,7 +120,7 @@ class ValueAfter:
     label: str = ""
 
     def variables(self) -> list[int]:
-        return _ids((self.writer, self.known)) + [self.target] + ([] if self.previous is None else [self.previous])
+        return _ids((self.writer,)) + [self.target] + ([] if self.previous is None else [self.previous])
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,7 +138,22 @@ class Compare:
         return _ids((self.holds,)) + [self.value]
 
 
-Record = Clause | Exactly | AndOf | OrOf | ValueAfter | Compare
+@dataclass(frozen=True, slots=True)
+class Difference:
+    """Integer ``target`` equals integer ``first`` minus integer ``second`` (None: 0): how far
+    apart two offsets of one unknown value are (``encoding``, start values)."""
+
+    kind: ClassVar[RecordKind] = RecordKind.DIFFERENCE
+    target: int
+    first: int | None
+    second: int | None
+    label: str = ""
+
+    def variables(self) -> list[int]:
+        return [self.target] + [v for v in (self.first, self.second) if v is not None]
+
+
+Record = Clause | Exactly | AndOf | OrOf | ValueAfter | Compare | Difference
 
 
 class VariableGroups:

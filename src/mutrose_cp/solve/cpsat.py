@@ -30,6 +30,7 @@ from .boolean_model import (
     BoolModel,
     Clause,
     Compare,
+    Difference,
     Exactly,
     Lit,
     OrOf,
@@ -385,7 +386,7 @@ def _signature(bm: BoolModel, comp: Component) -> tuple[tuple[object, ...], list
     for r in comp.records:
         # only a numeric record has integer variables (their ranges belong to the key)
         ints = (tuple((bm.ints[v].lo, bm.ints[v].hi) for v in r.variables() if v in bm.ints)
-                if isinstance(r, (ValueAfter, Compare)) else ())
+                if isinstance(r, (ValueAfter, Compare, Difference)) else ())
         parts.append((r.kind, _canonical(r, lit, cid), ints))
     order = sorted(canon, key=canon.__getitem__)
     key = (tuple(parts), tuple(canon[v] for v in comp.choice_vars if v in canon))
@@ -403,8 +404,10 @@ def _canonical(r: Record, lit: Callable[[Lit], int | Const], cid: Callable[[int]
         case AndOf(lits=lits, target=target) | OrOf(lits=lits, target=target):
             return tuple(lit(l) for l in lits), lit(target)
         case ValueAfter():
-            return (lit(r.writer), lit(r.known), cid(r.target), None if r.previous is None else cid(r.previous),
+            return (lit(r.writer), cid(r.target), None if r.previous is None else cid(r.previous),
                     r.previous_value, r.amount, r.effect)
+        case Difference(target=target, first=first, second=second):
+            return cid(target), None if first is None else cid(first), None if second is None else cid(second)
         case Compare(holds=holds, value=value, op=op, bound=bound):
             return lit(holds), cid(value), op, bound
 

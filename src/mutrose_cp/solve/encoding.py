@@ -23,7 +23,20 @@ from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
 from ..model import Comparison, Configuration, Domain, GoalModel, InitialState, Literal
 from ..model.task_graph import TaskGraph, TaskVertex
-from .boolean_model import FALSE, TRUE, BoolModel, Compare, Exactly, Lit, Name, NumericEffectKind, ValueAfter, neg
+from .boolean_model import (
+    FALSE,
+    TRUE,
+    BoolModel,
+    Compare,
+    Difference,
+    Exactly,
+    Lit,
+    Name,
+    NumericEffectKind,
+    ValueAfter,
+    neg,
+)
+from .numeric import SCALE, offset_gap, scaled
 from .semantics import (
     AtomKey,
     ConstraintIndex,
@@ -40,11 +53,11 @@ from .semantics import (
     initial_state,
     mission_queue,
     robot_precondition_writers,
+    show_precondition,
     unique_branch_valid,
 )
 from .replay import CHECKS, TASK_RULES, CopyReplay
 
-SCALE = 1000  # numeric values are compared as integers in thousandths
 V = TypeVar("V")  # the value a chain of writers carries
 
 
@@ -62,7 +75,7 @@ class Encoding:
 
 # How the encoder's variables are named: the parts of a name are kept, and the text is made
 # when it is read (BoolModel.name).  A name's parts are (kind, atom or None, vertex, extra).
-OR_CHOICE, AFTER, KNOWN_AFTER, COMPARED, CONTEXT, PRECONDITION, ACHIEVE, SET_BELOW, CLEARED_BELOW = range(9)
+OR_CHOICE, AFTER, KNOWN_AFTER, COMPARED, CONTEXT, PRECONDITION, ACHIEVE, SET_BELOW, CLEARED_BELOW, OFFSET_GAP = range(10)
 
 
 _NAMES: dict[int, Callable[[TaskGraph, Any, int, Any], str]] = {  # kind -> (tg, atom, vertex, extra) -> text
@@ -75,6 +88,7 @@ _NAMES: dict[int, Callable[[TaskGraph, Any, int, Any], str]] = {  # kind -> (tg,
     ACHIEVE: lambda tg, _, v, goal: f"achieve({goal}@{v})",
     SET_BELOW: lambda tg, atom, v, _: f"{_atom_name(atom)} set below {v}",
     CLEARED_BELOW: lambda tg, atom, v, _: f"{_atom_name(atom)} cleared below {v}",
+    OFFSET_GAP: lambda tg, atom, _, pair: f"{_atom_name(atom)} offset gap {pair[0]}-{pair[1]}",
 }
 
 
@@ -131,6 +145,8 @@ class Encoder:
             for key, kind, amount in self.effects[d].numeric:
                 self.num_writers.setdefault(key, []).append((d, kind, amount))
         self.conflicts = ParallelConflicts(self.scopes, self.bool_writers)
+        # the comparisons required of values the world does not give, by atom (.numeric)
+        self.start_tests: dict[AtomKey, list[_StartTest]] = {}
 
     # ------------------------------------------------------------------------------------------
     def encode(self) -> Encoding:
@@ -144,6 +160,7 @@ class Encoder:
             tasks = [v for v in self.queue if isinstance(tg.vertices[v], TaskVertex)]
             self._each(TASK_RULES, tasks, self._task_rules)
             self._each(CHECKS, self.queue, self._checks)
+            self._start_values()
             if self._replay is not None:
                 self.replayed = self._replay.summary()
         finally:
@@ -298,18 +315,73 @@ class Encoder:
         known, true = self._bool_value(atom, writers)
         return self.m.or_of([neg(known), true if positive else neg(true)], name)
 
-    def _num_holds(self, atom: AtomKey, op: str, bound: float, writers: Sequence[tuple[int, str, float]], name: Name) -> Lit:
-        """Literal: the open-world comparison ``atom op bound`` holds after ``writers``."""
+    def _num_holds(self, atom: AtomKey, op: str, bound: float, writers: Sequence[tuple[int, str, float]], name: Name,
+                   required: "_Requirement | None" = None) -> Lit:
+        """Literal: the open-world comparison ``atom op bound`` holds after ``writers``.
+
+        On a value the world does not give (and no chosen writer assigned) the comparison is
+        not refuted; when ``required`` (the comparison must hold where ``required.lit`` is
+        true), it is kept as a condition on the start value, checked against the others
+        (:meth:`_start_values`)."""
         init = self.values.get(atom)
         if not writers:
             if init is None:
+                self._require_start(atom, op, bound, required, TRUE, None)
                 return TRUE
             return TRUE if compare(init, op, bound) else FALSE
         known, value = self._num_value(atom, writers)
         assert isinstance(value, int)
+        if init is None:
+            self._require_start(atom, op, bound, required, neg(known), value)
+        if known is FALSE:
+            return TRUE
         sat = self.m.new_bool((COMPARED, atom, -1, (op, bound)))
-        self.m.records.append(Compare(sat, value, op, round(bound * SCALE)))
+        self.m.records.append(Compare(sat, value, op, scaled(bound)))
         return self.m.or_of([neg(known), sat], name)
+
+    def _require_start(self, atom: AtomKey, op: str, bound: float, required: "_Requirement | None", unknown: Lit,
+                       offset: int | None) -> None:
+        if required is None or unknown is FALSE:
+            return
+        if self._replay is not None:
+            self._replay.chain_read(atom, True)  # a copy whose start values are compared is encoded in full
+        self.start_tests.setdefault(atom, []).append(_StartTest(required, unknown, offset, op, scaled(bound)))
+
+    def _start_values(self) -> None:
+        """One start value must meet every comparison required on a value the world does not
+        give: every two of them, when both are required and both still see the start value,
+        must leave it a common value (:mod:`.numeric`; by Helly's theorem that is enough)."""
+        for atom, tests in self.start_tests.items():
+            for j, second in enumerate(tests):
+                for first in tests[:j]:
+                    self._start_pair(atom, first, second)
+
+    def _start_pair(self, atom: AtomKey, first: "_StartTest", second: "_StartTest") -> None:
+        gap = offset_gap((first.op, first.bound), (second.op, second.bound))
+        if gap.always:
+            return
+        both = [neg(first.required.lit), neg(second.required.lit), neg(first.unknown), neg(second.unknown)]
+        label = self._label(lambda: (
+            f"start:{atom}:{first.required.describe()}:{second.required.describe()}",
+            f"{second.required.describe()} cannot hold together with {first.required.describe()}: the world does not give "
+            f"{_atom_name(atom)}, and no value of it meets both"))
+        if first.offset == second.offset:  # the same chain value, or both the start value itself
+            if not gap.admits(0):
+                self.m.clause(both, label)
+            return
+        difference = self._offset_difference(atom, first.offset, second.offset)
+        for op, bound in (("<=", gap.high), (">=", gap.low), ("<>", gap.excluded)):
+            if bound is not None:
+                holds = self.m.new_bool((COMPARED, atom, -1, (op, bound / SCALE)))
+                self.m.records.append(Compare(holds, difference, op, bound))
+                self.m.clause([*both, holds], label)
+
+    def _offset_difference(self, atom: AtomKey, first: int | None, second: int | None) -> int:
+        """An integer variable equal to offset ``second`` minus offset ``first`` (None: 0)."""
+        span = sum(self.m.ints[v].hi for v in (first, second) if v is not None)
+        target = self.m.new_int((OFFSET_GAP, atom, -1, (first, second)), -span, span)
+        self.m.records.append(Difference(target, second, first))
+        return target
 
     def _num_value(self, atom: AtomKey, writers: Sequence[tuple[int, str, float]]) -> tuple[Lit, int | None]:
         """(known literal, integer variable) of ``atom`` after the chosen ``writers``: a chain of
@@ -325,44 +397,50 @@ class Encoder:
             while len(prefix) <= k:
                 node, span = prefix[-1]
                 w, kind, amount = everyone[len(prefix) - 1]
-                span += abs(round(amount * SCALE))
+                span += abs(scaled(amount))
                 prefix.append((self._num_step(atom, node, w, kind, amount, span, init), span))
             return prefix[k][0].value
         node, span = root, self._num_span(init)
         for w, kind, amount in writers:
-            span += abs(round(amount * SCALE))
+            span += abs(scaled(amount))
             node = self._num_step(atom, node, w, kind, amount, span, init)
         return node.value
 
     @staticmethod
     def _num_span(init: float | None) -> int:
-        return abs(round(init * SCALE) if init is not None else 0) + 1
+        return abs(scaled(init) if init is not None else 0) + 1
 
     def _num_step(self, atom: AtomKey, node: "_Chain[tuple[Lit, int | None]]", w: int, kind: str, amount: float,
                   span: int, init: float | None) -> "_Chain[tuple[Lit, int | None]]":
         """The chain node after writer ``w`` (changing ``atom`` by ``kind`` and ``amount`` if chosen)
         follows ``node``; ``span`` bounds the value's magnitude so far."""
-        scaled = round(amount * SCALE)
-        step = node.next.get((w, kind, scaled))
+        amount_scaled = scaled(amount)
+        step = node.next.get((w, kind, amount_scaled))
         if step is None:
             known, prev_var = node.value
             xw = self.x[w]
             nxt = self.m.new_int((AFTER, atom, w, None), -span, span)
-            prev_const = round(init * SCALE) if init is not None else 0
-            self.m.records.append(ValueAfter(xw, known, nxt, prev_var, prev_const, scaled, NumericEffectKind(kind)))
-            step = node.next[(w, kind, scaled)] = _Chain((self.m.or_of([known, xw], (KNOWN_AFTER, atom, w, None)), nxt))
+            prev_const = scaled(init) if init is not None else 0
+            self.m.records.append(ValueAfter(xw, nxt, prev_var, prev_const, amount_scaled, NumericEffectKind(kind)))
+            # only an assignment makes a value known: an increase of an unknown value changes
+            # its offset (the chain then holds the offset)
+            known_after = self.m.or_of([known, xw], (KNOWN_AFTER, atom, w, None)) if kind == "assign" else known
+            step = node.next[(w, kind, amount_scaled)] = _Chain((known_after, nxt))
         return step
 
-    def _state_test(self, test: Test, decs: Seen, name: Name) -> Lit:
-        """Literal for an achieve/context test evaluated after the chosen ``decs``."""
+    def _state_test(self, test: Test, decs: Seen, name: Name, required: "_Requirement | None" = None) -> Lit:
+        """Literal for an achieve/context test evaluated after the chosen ``decs``; ``required``
+        passes to its conjuncts, not into a disjunction (whose comparisons on unknown values
+        hold, the open world)."""
         if isinstance(test, FactTest):
             atom = (test.predicate, test.args)
             return self._bool_holds(atom, test.positive, self._bool_writers(atom, decs), name)
         if isinstance(test, ValueTest):
             atom = (test.function, test.args)
-            return self._num_holds(atom, test.op, test.value, self._num_writers(atom, decs), name)
-        parts = [self._state_test(p, decs, name) for p in test.parts]
-        return self.m.and_of(parts, name) if isinstance(test, AllOf) else self.m.or_of(parts, name)
+            return self._num_holds(atom, test.op, test.value, self._num_writers(atom, decs), name, required)
+        if isinstance(test, AllOf):
+            return self.m.and_of([self._state_test(p, decs, name, required) for p in test.parts], name)
+        return self.m.or_of([self._state_test(p, decs, name) for p in test.parts], name)
 
     def _bool_writers(self, atom: AtomKey, seen: Seen) -> Sequence[tuple[int, bool]]:
         everyone = self.bool_writers.get(atom, [])
@@ -399,7 +477,7 @@ class Encoder:
             for c in dec.predicates.checked_preconditions:
                 if any(a.startswith("?") for a in c.args):
                     continue
-                label = self._label(lambda: (f"pre:{dec.id}:{c}", f"{dec.id}: precondition {_show(c)}"))
+                label = self._label(lambda: (f"pre:{dec.id}:{c}", f"{dec.id}: precondition {show_precondition(c)}"))
                 if isinstance(c, Literal):
                     atom = (c.predicate, c.args)
                     if atom not in writers_seen:
@@ -407,7 +485,8 @@ class Encoder:
                     ok = self._bool_holds(atom, c.positive, writers_seen[atom], (PRECONDITION, None, d, None))
                 else:
                     atom = (c.function, c.args)
-                    ok = self._num_holds(atom, c.op, c.value, self._num_writers(atom, seen), (PRECONDITION, None, d, None))
+                    ok = self._num_holds(atom, c.op, c.value, self._num_writers(atom, seen), (PRECONDITION, None, d, None),
+                                         _Requirement(self.x[d], functools.partial(_precondition_text, dec.id, c)))
                 self.m.clause([neg(self.x[d]), ok], label)
             self._robot_rules(d, t)
 
@@ -421,7 +500,7 @@ class Encoder:
             for e, value in reversed(writers):
                 if value != lit.positive:
                     self.m.clause([neg(self.x[d]), neg(self.x[e])] + later,
-                                  self._label(lambda: (f"robot:{dec.id}:{lit}", f"{dec.id}: robot precondition {_show(lit)} "
+                                  self._label(lambda: (f"robot:{dec.id}:{lit}", f"{dec.id}: robot precondition {show_precondition(lit)} "
                                               f"contradicts the effect of {tg.vertices[e].content}")))
                 later.append(self.x[e])
 
@@ -449,10 +528,36 @@ class Encoder:
         decs = self.scopes.seen_runs_by_achieve(v)
         parts = list(_conjuncts(test))
         for i, part in enumerate(parts):
-            holds = self._state_test(part, decs, (ACHIEVE, None, v, goal))
+            holds = self._state_test(part, decs, (ACHIEVE, None, v, goal),
+                                     _Requirement(self.active[v], lambda: f"the achieve condition of goal {goal}"))
             self.m.clause([neg(self.active[v]), holds],
                           self._label(lambda: (f"achieve:{v}:{goal}:{i}",
                                                f"achieve condition of goal {goal}: {_show_test(part)}")))
+
+
+@dataclass(frozen=True, slots=True)
+class _Requirement:
+    """A comparison must hold where ``lit`` is true; ``describe`` names it (for explanations)."""
+
+    lit: Lit
+    describe: Callable[[], str]
+
+
+@dataclass(frozen=True, slots=True)
+class _StartTest:
+    """A comparison required on a value the world does not give: where ``required`` and
+    ``unknown`` (no chosen writer assigned it) hold, the start value plus ``offset`` (an integer
+    variable, None: 0) compares ``op`` with ``bound`` (thousandths)."""
+
+    required: _Requirement
+    unknown: Lit
+    offset: int | None
+    op: str
+    bound: int
+
+
+def _precondition_text(dec_id: str, c: Literal | Comparison) -> str:
+    return f"{dec_id}: precondition {show_precondition(c)}"
 
 
 @dataclass
@@ -483,9 +588,3 @@ def _show_test(test: Test) -> str:
         return f"{test.function}({', '.join(test.args)}) {test.op} {test.value:g}"
     joiner = " and " if isinstance(test, AllOf) else " or "
     return "(" + joiner.join(_show_test(p) for p in test.parts) + ")"
-
-
-def _show(c: Literal | Comparison) -> str:
-    if isinstance(c, Literal):
-        return f"{'' if c.positive else 'not '}{c.predicate}({', '.join(c.args)})"
-    return f"{c.function}({', '.join(c.args)}) {c.op} {c.value}"

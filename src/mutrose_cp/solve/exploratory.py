@@ -8,13 +8,14 @@ the choices, which is what the CP-SAT decomposer avoids.  The rules themselves a
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 from ..constraints import Constraint
 from ..errors import NoDecompositionError, Problem
 from ..model import Configuration, Domain, GoalModel, InitialState, Literal
 from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex
+from .numeric import StartConditions
 from .semantics import (
     ConstraintIndex,
     EffectScopes,
@@ -29,6 +30,7 @@ from .semantics import (
     initial_state,
     mission_queue,
     parallel_conflicts,
+    precondition_start_conditions,
     robot_precondition_writers,
     unique_branch_valid,
 )
@@ -37,13 +39,18 @@ from .semantics import (
 @dataclass
 class _PartialDecomposition:
     """A partial mission decomposition: the chosen decomposition vertices in mission order,
-    and the same as a set."""
+    the same as a set, and what its comparisons require of the start values the world does
+    not give (:mod:`.numeric`)."""
 
     order: list[int]
     chosen: set[int]
+    starts: StartConditions = field(default_factory=StartConditions)
 
-    def extended(self, d: int) -> "_PartialDecomposition":
-        return _PartialDecomposition(self.order + [d], self.chosen | {d})
+    def extended(self, d: int, starts: StartConditions) -> "_PartialDecomposition":
+        return _PartialDecomposition(self.order + [d], self.chosen | {d}, starts)
+
+    def copy(self) -> "_PartialDecomposition":
+        return _PartialDecomposition(list(self.order), set(self.chosen), self.starts)
 
 
 class ExploratoryDecomposer:
@@ -130,7 +137,7 @@ class ExploratoryDecomposer:
             saved = self.partials
             collected: list[_PartialDecomposition] = []
             while self._front_is_child_of(v.index):
-                self.partials = [_PartialDecomposition(list(m.order), set(m.chosen)) for m in saved]
+                self.partials = [m.copy() for m in saved]
                 self._visit()
                 collected.extend(self.partials)
             self.partials = collected
@@ -149,7 +156,15 @@ class ExploratoryDecomposer:
             return
         seen = self.scopes.seen_by_achieve(v.index)
         for goal, test in tests:
-            kept = [m for m in self.partials if self._state(m, seen).satisfies(test)]
+            kept = []
+            for m in self.partials:
+                state = self._state(m, seen)
+                if not state.satisfies(test):
+                    continue
+                starts = m.starts.admit(state.required_conditions(test, f"achieve condition of goal {goal}"))
+                if starts is not None:
+                    m.starts = starts
+                    kept.append(m)
             if not kept and self.partials:
                 self._dropped_all(f"{self.gm.source}: goal {goal}: No decomposition satisfied achieve "
                                   f"condition of goal {goal}")
@@ -189,8 +204,11 @@ class ExploratoryDecomposer:
                 continue  # an enabled creation condition does not hold where the task starts
             for d in decompositions:
                 assert d.decomposition is not None
-                if ground_preconditions_hold(d.decomposition, start) and self._robot_ok(d.index, m):
-                    emitted.append(m.extended(d.index))
+                if not (ground_preconditions_hold(d.decomposition, start) and self._robot_ok(d.index, m)):
+                    continue
+                starts = m.starts.admit(precondition_start_conditions(d.decomposition, start))
+                if starts is not None:
+                    emitted.append(m.extended(d.index, starts))
         if not emitted and self.partials:
             assert v.instance is not None
             self._dropped_all(

@@ -18,6 +18,7 @@ from .boolean_model import (
     Clause,
     Compare,
     Const,
+    Difference,
     Exactly,
     Lit,
     NumericEffectKind,
@@ -147,6 +148,10 @@ class ProtoBuilder:
                 c = None
             case ValueAfter():
                 c = self._value_after(r)
+            case Difference(target=target, first=first, second=second):
+                terms = [(self.var(target), 1)] + [(self.var(v), sign) for v, sign in ((first, -1), (second, 1))
+                                                   if v is not None]
+                c = self._linear(terms, 0, 0)
             case Compare(holds=holds, value=value, op=op, bound=bound):
                 sat, index = self.lit(holds), self.var(value)
                 satisfying, failing = _intervals(op, bound)
@@ -172,14 +177,12 @@ class ProtoBuilder:
 
     def _value_after(self, r: ValueAfter) -> cmh.ConstraintProto:
         target = self.var(r.target)
-        written, known = self.lit(r.writer), self.lit(r.known)
+        written = self.lit(r.writer)
         if r.effect == NumericEffectKind.ASSIGN:
             self._linear([(target, 1)], r.amount, r.amount, [written])
         else:
-            # adding to an unknown value starts from the amount itself
             after = r.amount + self._before_constant(r)
-            self._linear(self._minus_before(target, r), after, after, [written, known])
-            self._linear([(target, 1)], r.amount, r.amount, [written, negated(known)])
+            self._linear(self._minus_before(target, r), after, after, [written])
         return self._linear(self._minus_before(target, r), self._before_constant(r), self._before_constant(r),
                             [negated(written)])
 

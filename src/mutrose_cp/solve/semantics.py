@@ -26,11 +26,12 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Iterable, Iterator, Mapping, Sequence, TypeVar, overload
 
-from ..conditions import AllOf, Test, compare, holds, translate
+from ..conditions import AllOf, Test, ValueTest, compare, holds, translate
 from ..constraints import EC, SEQ, Constraint
 from ..errors import MissionError
-from ..model import Binding, Configuration, Domain, GoalModel, InitialState, Literal
+from ..model import Binding, Comparison, Configuration, Domain, GoalModel, InitialState, Literal
 from ..model.task_graph import Decomposition, DecompositionVertex, EdgeKind, OperatorVertex, ScopeVertex, TaskGraph, TaskVertex
+from .numeric import StartCondition, StartConditions, scaled
 
 AtomKey = tuple[str, tuple[str, ...]]
 
@@ -67,25 +68,52 @@ def effects_of(dec: Decomposition) -> Effects:
 
 
 class State:
-    """A ground world state: the initial facts overlaid with applied effects."""
+    """A ground world state: the initial facts overlaid with applied effects.
 
-    __slots__ = ("facts", "values")
+    A function's value is known (``values``), or unknown plus what the increases and decreases
+    applied so far add up to (``offsets``, :mod:`.numeric`): an increase of a value the world
+    does not give leaves it unknown."""
 
-    def __init__(self, facts: dict[AtomKey, bool], values: dict[AtomKey, float]) -> None:
+    __slots__ = ("facts", "values", "offsets")
+
+    def __init__(self, facts: dict[AtomKey, bool], values: dict[AtomKey, float],
+                 offsets: dict[AtomKey, float] | None = None) -> None:
         self.facts = facts
         self.values = values
+        self.offsets: dict[AtomKey, float] = offsets if offsets is not None else {}
 
     def copy(self) -> "State":
-        return State(dict(self.facts), dict(self.values))
+        return State(dict(self.facts), dict(self.values), dict(self.offsets))
 
     def apply(self, eff: Effects) -> None:
         for key, val in eff.facts:
             self.facts[key] = val
         for key, kind, amount in eff.numeric:
-            if kind == "assign" or key not in self.values:
+            if kind == "assign":
                 self.values[key] = amount
-            else:
+                self.offsets.pop(key, None)
+            elif key in self.values:
                 self.values[key] = self.values[key] + amount
+            else:
+                self.offsets[key] = self.offsets.get(key, 0) + amount
+
+    def start_condition(self, atom: AtomKey, op: str, bound: float, source: str) -> StartCondition | None:
+        """What ``atom op bound`` required here asks of the atom's start value, when the world
+        does not give it and no assignment did (None when the value is known)."""
+        if atom in self.values:
+            return None
+        return StartCondition(op, scaled(bound) - scaled(self.offsets.get(atom, 0)), source)
+
+    def required_conditions(self, test: Test, source: str) -> list[tuple[AtomKey, StartCondition]]:
+        """The start conditions of the comparisons ``test`` requires outright (its conjuncts;
+        a comparison in a disjunction constrains nothing, the open world)."""
+        if isinstance(test, ValueTest):
+            atom = (test.function, test.args)
+            condition = self.start_condition(atom, test.op, test.value, source)
+            return [] if condition is None else [(atom, condition)]
+        if isinstance(test, AllOf):
+            return [found for part in test.parts for found in self.required_conditions(part, source)]
+        return []
 
     def fact(self, predicate: str, args: tuple[str, ...]) -> bool | None:
         return self.facts.get((predicate, args))
@@ -235,6 +263,26 @@ def ground_preconditions_hold(dec: Decomposition, state: State) -> bool:
     return True
 
 
+def precondition_start_conditions(dec: Decomposition, state: State) -> list[tuple[AtomKey, StartCondition]]:
+    """The start conditions (:mod:`.numeric`) of ``dec``'s ground numeric preconditions on
+    values that are unknown where it starts in ``state``."""
+    out = []
+    for c in dec.predicates.checked_preconditions:
+        if isinstance(c, Literal) or not is_ground(c.args):
+            continue
+        atom = (c.function, c.args)
+        condition = state.start_condition(atom, c.op, c.value, f"{dec.id}: precondition {show_precondition(c)}")
+        if condition is not None:
+            out.append((atom, condition))
+    return out
+
+
+def show_precondition(c: Literal | Comparison) -> str:
+    if isinstance(c, Literal):
+        return f"{'' if c.positive else 'not '}{c.predicate}({', '.join(c.args)})"
+    return f"{c.function}({', '.join(c.args)}) {c.op} {c.value}"
+
+
 def robot_parameters(domain: Domain, dec: Decomposition) -> list[tuple[str, str]]:
     """The (parameter, type) pairs of the decomposition's task that are robots."""
     task = domain.task_by_name[dec.instance.name]
@@ -338,6 +386,7 @@ def unique_branch_valid(tg: TaskGraph, dec: DecompositionVertex, initial: State,
     assert dec.decomposition is not None
     if not ground_preconditions_hold(dec.decomposition, initial):
         return False
+    required = precondition_start_conditions(dec.decomposition, initial)
     tests = []
     v = tg.vertices[dec.parent].parent
     while v >= 0:
@@ -345,11 +394,13 @@ def unique_branch_valid(tg: TaskGraph, dec: DecompositionVertex, initial: State,
         if test is not None:
             tests.append(test)
         v = tg.vertices[v].parent
-    if not tests:
-        return True
     state = initial.copy()
     state.apply(effects_of(dec.decomposition))
-    return all(state.satisfies(t) for t in tests)
+    for t in tests:
+        if not state.satisfies(t):
+            return False
+        required += state.required_conditions(t, "achieve condition")
+    return StartConditions().admit(required) is not None
 
 
 # ---------------------------------------------------------------------------------------------

@@ -22,6 +22,7 @@ from .boolean_model import (
     Clause,
     Compare,
     Const,
+    Difference,
     Exactly,
     Lit,
     NumericEffectKind,
@@ -35,7 +36,7 @@ MAX_WORK = 4096  # assignments x records: beyond this CP-SAT is the faster way
 def defined_variable(r: Record) -> int | None:
     """The variable ``r`` defines, if it is a definition."""
     match r:
-        case AndOf(target=target) | OrOf(target=target) | ValueAfter(target=target):
+        case AndOf(target=target) | OrOf(target=target) | ValueAfter(target=target) | Difference(target=target):
             return target
         case Compare(holds=holds):
             return holds if isinstance(holds, int) and holds > 0 else -1  # -1: not a definition
@@ -101,6 +102,10 @@ def holds(r: Record, values: dict[int, int], bm: BoolModel) -> bool:
             values[target] = int(any(_lit(l, values) for l in lits))
         case ValueAfter():
             return _value_after(r, values, bm)
+        case Difference(target=target, first=first, second=second):
+            values[target] = (values[first] if first is not None else 0) - (values[second] if second is not None else 0)
+            bounds = bm.ints[target]
+            return bounds.lo <= values[target] <= bounds.hi
         case Compare(holds=holds, value=value, op=op, bound=bound):
             assert isinstance(holds, int)  # a variable of its own (free_variables checked it)
             values[holds] = int(compare(values[value], op, bound))
@@ -112,8 +117,8 @@ def _value_after(r: ValueAfter, values: dict[int, int], bm: BoolModel) -> bool:
     before = values[r.previous] if r.previous is not None else r.previous_value
     if not _lit(r.writer, values):
         value = before
-    elif r.effect == NumericEffectKind.ASSIGN or not _lit(r.known, values):
-        value = r.amount  # an assignment, or an increase of an unknown value
+    elif r.effect == NumericEffectKind.ASSIGN:
+        value = r.amount
     else:
         value = before + r.amount
     bounds = bm.ints[r.target]

@@ -85,18 +85,28 @@ class Report:
 
 
 class State:
-    """Known facts and function values; an absent atom is unknown."""
+    """Known facts and function values; an absent atom is unknown.  Of a function the world
+    does not give, ``offsets`` holds what the increases and decreases so far added to it (it
+    stays unknown until an assignment)."""
 
-    def __init__(self, facts: dict[AtomKey, bool], values: dict[AtomKey, float]) -> None:
+    def __init__(self, facts: dict[AtomKey, bool], values: dict[AtomKey, float],
+                 offsets: dict[AtomKey, float] | None = None) -> None:
         self.facts = facts
         self.values = values
+        self.offsets: dict[AtomKey, float] = offsets if offsets is not None else {}
 
     @classmethod
     def initial(cls, initial: InitialState) -> "State":
         return cls(initial.fact_map(), dict(initial.value_map()))
 
     def copy(self) -> "State":
-        return State(dict(self.facts), dict(self.values))
+        return State(dict(self.facts), dict(self.values), dict(self.offsets))
+
+
+# What the tasks of one mission decomposition required of the start value of each function
+# the world does not give: (op, bound on the start value, negated, who required it).  One
+# start value must meet them all.
+StartTests = dict[AtomKey, list[tuple[str, float, bool, str]]]
 
 
 @dataclass
@@ -109,19 +119,33 @@ class TaskEffects:
     def apply(self, state: State) -> None:
         state.facts.update(self.facts)
         for key, kind, amount in self.numeric:
+            change = amount if kind == "increase" else -amount
             if kind == "assign":
                 state.values[key] = amount
+                state.offsets.pop(key, None)
             elif key in state.values:
-                state.values[key] += amount if kind == "increase" else -amount
+                state.values[key] += change
+            else:
+                state.offsets[key] = state.offsets.get(key, 0.0) + change
 
 
-def _some_value_meets(required: list[tuple[str, float, bool]]) -> bool:
+def _some_value_meets(required: list[tuple[str, float, bool, str]]) -> bool:
     """Whether some number meets every (op, bound, negated) test.  The numbers that meet them
     are a union of intervals and points between the bounds, so trying each bound, a point
     between each two and one beyond each end decides it."""
-    bounds = sorted({bound for _, bound, _ in required})
+    if not required:
+        return True
+    bounds = sorted({bound for _, bound, _, _ in required})
     candidates = bounds + [(a + b) / 2 for a, b in zip(bounds, bounds[1:])] + [bounds[0] - 1, bounds[-1] + 1]
-    return any(all(_compare(x, op, bound) != negated for op, bound, negated in required) for x in candidates)
+    return any(all(_compare(x, op, bound) != negated for op, bound, negated, _ in required) for x in candidates)
+
+
+def _first_conflict(required: list[tuple[str, float, bool, str]]) -> str:
+    """Who required what, up to the first test no value meets together with the earlier ones."""
+    for k in range(1, len(required) + 1):
+        if not _some_value_meets(required[:k]):
+            return "; ".join(who for *_, who in required[:k])
+    return ""
 
 
 def _compare(value: float, op: str, bound: float) -> bool:
@@ -175,16 +199,18 @@ class _StepReplay:
     changed so far, else the start state, else what it assumed (an atom nothing knows is
     assumed as first required); effects are recorded."""
 
-    def __init__(self, values: dict[str, tuple[str, ...]], start: State) -> None:
+    def __init__(self, values: dict[str, tuple[str, ...]], start: State, earlier: StartTests, task: str) -> None:
         self.values = values
         self.start = start
+        self.earlier = earlier  # what earlier tasks required of unknown start values
+        self.task = task
         self.changed = TaskEffects()
         self.facts: dict[AtomKey, bool] = {}  # changed facts
         self.assumed: dict[AtomKey, bool] = {}
         self.nums: dict[AtomKey, float | None] = {}  # function values known or changed here
-        # a function nothing knows: what the steps required of its value where the task
-        # starts (op, bound, negated), and what they added to it since
-        self.required: dict[AtomKey, list[tuple[str, float, bool]]] = {}
+        # a function nothing knows: what the steps required of its value where the mission
+        # starts (op, bound, negated, who), and what they added to it since the task started
+        self.required: StartTests = {}
         self.offset: dict[AtomKey, float] = {}
         self.failures: list[str] = []
 
@@ -223,11 +249,13 @@ class _StepReplay:
         value = self._value(key)
         if value is None:
             required = self.required.setdefault(key, [])
-            required.append((c.op, float(c.value) - self.offset.get(key, 0.0), c.negated))
-            if not _some_value_meets(required):
-                self.failures.append(f"precondition {'not ' if c.negated else ''}{c.function}({', '.join(g)}) "
-                                     f"{c.op} {c.value:g} of {what} (action {position + 1}) cannot hold together "
-                                     f"with the task's earlier preconditions on it (the world does not know it)")
+            shown = f"precondition {'not ' if c.negated else ''}{c.function}({', '.join(g)}) {c.op} {c.value:g}"
+            start = self.start.offsets.get(key, 0.0) + self.offset.get(key, 0.0)
+            required.append((c.op, float(c.value) - start, c.negated, f"{self.task}: {shown}"))
+            if not _some_value_meets(self.earlier.get(key, []) + required):
+                self.failures.append(f"{shown} of {what} (action {position + 1}) cannot hold together "
+                                     f"with the earlier preconditions on it (the world does not know it): "
+                                     f"{_first_conflict(self.earlier.get(key, []) + required)}")
             elif c.op == "=" and not c.negated:
                 self.nums[key] = float(c.value)
             return
@@ -286,6 +314,7 @@ class _Validator:
         self.gm_task_path = {n.id: self._ancestors(n) for n in gm.nodes if n.kind == "task"}
         self.rank = self._execution_rank()
         self._replays: dict[str, tuple[TaskEffects, list[str]] | None] = {}
+        self._start_tests: StartTests = {}  # of the mission decomposition being checked
         self._noted: set[str] = set()
         self._before: dict[str, set[str]] = {}  # per task, what the constraints put before it
         self._places_of: tuple[set[str] | None, dict[tuple[str, tuple[str, ...], int], list[str]]] = (None, {})
@@ -573,6 +602,7 @@ class _Validator:
         chosen = set(keys)
         entry: dict[str, State] = {}
         self._replays = {}
+        self._start_tests = {}
         for k in sorted(keys, key=self.rank.__getitem__):
             start = self._state_before([k], chosen)
             entry[k] = start
@@ -593,8 +623,10 @@ class _Validator:
         values = _values(task)
         first_failure: list[str] | None = None
         for steps in explanations:
-            effects, failures = self._run_steps(steps, values, start)
+            effects, failures, required = self._run_steps(steps, values, start, task.id)
             if not failures:
+                for key, tests in required.items():
+                    self._start_tests.setdefault(key, []).extend(tests)
                 return effects, []
             first_failure = first_failure or failures
         assert first_failure is not None
@@ -602,12 +634,14 @@ class _Validator:
             errors.append(Violation(i, task.id, f))
         return None
 
-    def _run_steps(self, steps: list[Step], values: dict[str, tuple[str, ...]], start: State) -> tuple[TaskEffects, list[str]]:
-        """Replay one explanation; unknown atoms are assumed when first required."""
-        replay = _StepReplay(values, start)
+    def _run_steps(self, steps: list[Step], values: dict[str, tuple[str, ...]], start: State,
+                   task: str) -> tuple[TaskEffects, list[str], StartTests]:
+        """Replay one explanation; unknown atoms are assumed when first required, and a
+        function the world does not give must keep one start value for every task."""
+        replay = _StepReplay(values, start, self._start_tests, task)
         for step in steps:
             replay.step(step)
-        return replay.changed, replay.failures
+        return replay.changed, replay.failures, replay.required
 
     # -- parallel conflicts ------------------------------------------------------------------------
     def _conflicts(self, i: int, keys: list[str], errors: list[Violation]) -> None:
@@ -718,23 +752,36 @@ class _Validator:
                state: State | None, task: str, errors: list[Violation], after: bool = False) -> None:
         if state is None:
             return
-        result = self._holds(cond, binding, state, goal)
+        result = self._holds(cond, binding, state, goal, required=after)
         if result is False:
             moment = f"after the tasks of {goal.id}" if after else f"where {task} starts"
             bound = ", ".join(f"{k} = {','.join(v)}" for k, v in sorted(binding.items()) if k in _variables(cond))
             errors.append(Violation(i, goal.id, f"{what} of goal {goal.id} ({_show_condition(cond)}"
                                                 f"{'; ' + bound if bound else ''}) does not hold {moment}"))
 
-    def _holds(self, cond: Condition, binding: dict[str, tuple[str, ...]], state: State, goal: GMNode) -> bool | None:
-        """Open-world evaluation; None when an atom cannot be translated."""
+    def _holds(self, cond: Condition, binding: dict[str, tuple[str, ...]], state: State, goal: GMNode,
+               required: bool = False) -> bool | None:
+        """Open-world evaluation; None when an atom cannot be translated.  A comparison that
+        is ``required`` (an achieve condition's conjunct) on a value the world does not give
+        is a condition on its start value, which must agree with the others."""
         if isinstance(cond, BoolOp):
-            parts = [self._holds(c, binding, state, goal) for c in cond.children]
+            parts = [self._holds(c, binding, state, goal, required and cond.op == "&&") for c in cond.children]
             if any(p is None for p in parts):
                 return None
             return all(parts) if cond.op == "&&" else any(parts)
-        return self._atom(cond, binding, state, goal)
+        return self._atom(cond, binding, state, goal, required)
 
-    def _atom(self, atom: Atom, binding: dict[str, tuple[str, ...]], state: State, goal: GMNode) -> bool | None:
+    def _start_value_meets(self, key: AtomKey, op: str, bound: float, state: State, who: str) -> bool:
+        """Whether the start value of ``key`` can meet ``op bound`` here too (then it must)."""
+        tests = self._start_tests.setdefault(key, [])
+        test = (op, bound - state.offsets.get(key, 0.0), False, who)
+        if not _some_value_meets(tests + [test]):
+            return False
+        tests.append(test)
+        return True
+
+    def _atom(self, atom: Atom, binding: dict[str, tuple[str, ...]], state: State, goal: GMNode,
+              required: bool = False) -> bool | None:
         relates = self.var_types.get(atom.variable, "")
         numeric = atom.op in ("=", "<>", ">", "<", ">=", "<=")
         for m in self.config.semantic_mapping:
@@ -742,9 +789,11 @@ class _Validator:
                     and m.mapped_type == ("function" if numeric else "predicate")):
                 values = binding.get(atom.variable, ())
                 if numeric:
-                    bound = float(atom.value)
-                    known = [state.values.get((m.pred, (v,))) for v in values]
-                    return all(k is None or _compare(k, atom.op or "=", bound) for k in known)
+                    bound, op = float(atom.value), atom.op or "="
+                    keys = [(m.pred, (v,)) for v in values]
+                    return all(_compare(state.values[k], op, bound) if k in state.values
+                               else not required or self._start_value_meets(k, op, bound, state, goal.id)
+                               for k in keys)
                 facts = [state.facts.get((m.pred, (v,))) for v in values]
                 return all(f is None or f == (not atom.negated) for f in facts)
         self._note(f"goal {goal.id}: {atom.text} has no attribute mapping for type {relates or '?'}: not checked")
