@@ -354,3 +354,28 @@ def test_unsatisfiable_path_through_an_abstract_subtask():
     binding = {"?r": "r1", "?rm": "RoomA"}
     assert ground_path(shut_first, binding).unsatisfiable == ("open(RoomA)",)
     assert ground_path(open_first, binding).unsatisfiable == ()
+
+
+def test_an_unknown_value_stays_unknown_in_path_generation():
+    """A method needing objects > 0, then a pick (objects - 1), then a step needing objects = 5:
+    from 6 objects this runs.  The original assumes objects = 1 for the > (it assumes the
+    value where a recursion would stop) and takes a decrease of an unknown value as the value
+    -1, so it drops the path; here the values stay unknown and the path is kept, its later
+    comparison moved to the start value (= 6 there)."""
+    domain = _domain("""
+  (:action need-five :parameters (?r - robot ?rm - room) :precondition (= (objects ?rm) 5))
+  (:task Take :parameters (?r - robot ?rm - room))
+  (:method take :parameters (?r - robot ?rm - room) :task (Take ?r ?rm)
+      :precondition (and (> (objects ?rm) 0))
+      :ordered-subtasks (and (pick ?r ?rm) (need-five ?r ?rm)))
+  (:task Lower :parameters (?r - robot ?rm - room))
+  (:method lower :parameters (?r - robot ?rm - room) :task (Lower ?r ?rm)
+      :ordered-subtasks (and (pick ?r ?rm) (pick ?r ?rm) (need-five ?r ?rm)))
+""")
+    [take] = task_paths(domain, "Take")
+    assert _names(take) == ["pick", "need-five"] and not take.never_valid
+    ground = ground_path(take, {"?r": "r1", "?rm": "RoomA"})
+    assert ground.checked_preconditions == (Comparison("objects", ("RoomA",), ">", 0),
+                                            Comparison("objects", ("RoomA",), "=", 6))
+    [lower] = task_paths(domain, "Lower")  # -1 - 1 = 5 fails in the original
+    assert ground_path(lower, {"?r": "r1", "?rm": "RoomA"}).shifted == (Comparison("objects", ("RoomA",), "=", 7),)

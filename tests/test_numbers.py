@@ -221,4 +221,19 @@ def test_validate_rejects_a_decomposition_that_forgets_a_pinned_value(tmp_path, 
     report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state,
                       load_decomposition_output(str(path)))
     assert not report.valid
-    assert any(v.task == "AT2_1|1" and "cannot hold together" in v.message for v in report.violations), report.violations
+    assert [(v.task, v.message) for v in report.violations] == [(
+        "AT2_1|1", "one start value of a function the world does not give must meet every comparison on it: "
+                   "AT1_1|1: precondition level(Room1) = 1; AT2_1|1: precondition level(Room1) = 1: no value of "
+                   "level(Room1) meets them all")]
+
+
+def test_validate_tries_every_method_that_explains_the_actions(tmp_path):
+    """Found by the oracle: two methods run the same action, one needing level > 0 and one
+    level = 0, and the forAll condition asks for level = 0 with level unknown.  The decomposers
+    list the task (its second method); the validator must not settle on the first method, whose
+    > 0 the condition then contradicts."""
+    task = Task("TaskA", (Method("more", (Cmp(">", 0),), ("report",)), Method("none", (Cmp("=", 0),), ("report",))))
+    spec = _spec((task,), (REPORT,), (None,), GoalNode((TaskNode("TaskA"), TaskNode("TaskA")), refinement="or"),
+                 "current_room.level = 0")
+    status, document = _both(spec, tmp_path / "mission")  # validates every listed decomposition
+    assert status == 0 and _valid(document) == {frozenset({"AT1_1|2"}), frozenset({"AT2_1|2"})}

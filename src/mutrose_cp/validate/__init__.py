@@ -105,8 +105,53 @@ class State:
 
 # What the tasks of one mission decomposition required of the start value of each function
 # the world does not give: (op, bound on the start value, negated, who required it).  One
-# start value must meet them all.
+# start value must meet them all (_StartValues).
 StartTests = dict[AtomKey, list[tuple[str, float, bool, str]]]
+
+
+@dataclass
+class _StartValues:
+    """What one mission decomposition requires of the start values the world does not give:
+    the achieve conditions' tests, and for each task the tests of each way its actions can be
+    explained (methods that run the same actions may require different values).  One start
+    value per function must meet the fixed tests and those of one explanation per task."""
+
+    fixed: StartTests = field(default_factory=dict)
+    tasks: list[tuple[str, list[StartTests]]] = field(default_factory=list)  # (task id, alternatives)
+
+    def conflict(self) -> tuple[str, str] | None:
+        """None when some choice of explanations leaves every function a value; else the first
+        task (in execution order) that no choice gets past ("" for the achieve conditions
+        alone), and the tests that exclude each other."""
+        if not all(_some_value_meets(v) for v in self.fixed.values()):
+            return "", self._excluding(self.fixed)
+        reached = [0]
+        if self._search(0, {key: list(v) for key, v in self.fixed.items()}, reached):
+            return None
+        k = min(reached[0], len(self.tasks) - 1)
+        tests: StartTests = {key: list(v) for key, v in self.fixed.items()}
+        for _, alternatives in self.tasks[:k + 1]:
+            for key, more in alternatives[0].items():
+                tests[key] = tests.get(key, []) + more
+        return self.tasks[k][0], self._excluding(tests)
+
+    def _search(self, k: int, tests: StartTests, reached: list[int]) -> bool:
+        """Whether explanations from the ``k``-th task on can be chosen to fit ``tests``."""
+        reached[0] = max(reached[0], k)
+        if k == len(self.tasks):
+            return True
+        for alternative in self.tasks[k][1]:
+            merged = {key: tests.get(key, []) + more for key, more in alternative.items()}
+            if all(_some_value_meets(v) for v in merged.values()) and self._search(k + 1, {**tests, **merged}, reached):
+                return True
+        return False
+
+    @staticmethod
+    def _excluding(tests: StartTests) -> str:
+        for key, found in tests.items():
+            if not _some_value_meets(found):
+                return f"{_first_conflict(found)}: no value of {key[0]}({', '.join(key[1])}) meets them all"
+        return "the other tasks' comparisons on values the world does not give exclude each of its explanations"
 
 
 @dataclass
@@ -199,10 +244,9 @@ class _StepReplay:
     changed so far, else the start state, else what it assumed (an atom nothing knows is
     assumed as first required); effects are recorded."""
 
-    def __init__(self, values: dict[str, tuple[str, ...]], start: State, earlier: StartTests, task: str) -> None:
+    def __init__(self, values: dict[str, tuple[str, ...]], start: State, task: str) -> None:
         self.values = values
         self.start = start
-        self.earlier = earlier  # what earlier tasks required of unknown start values
         self.task = task
         self.changed = TaskEffects()
         self.facts: dict[AtomKey, bool] = {}  # changed facts
@@ -252,10 +296,9 @@ class _StepReplay:
             shown = f"precondition {'not ' if c.negated else ''}{c.function}({', '.join(g)}) {c.op} {c.value:g}"
             start = self.start.offsets.get(key, 0.0) + self.offset.get(key, 0.0)
             required.append((c.op, float(c.value) - start, c.negated, f"{self.task}: {shown}"))
-            if not _some_value_meets(self.earlier.get(key, []) + required):
+            if not _some_value_meets(required):
                 self.failures.append(f"{shown} of {what} (action {position + 1}) cannot hold together "
-                                     f"with the earlier preconditions on it (the world does not know it): "
-                                     f"{_first_conflict(self.earlier.get(key, []) + required)}")
+                                     f"with the task's earlier preconditions on it (the world does not know it)")
             elif c.op == "=" and not c.negated:
                 self.nums[key] = float(c.value)
             return
@@ -314,7 +357,7 @@ class _Validator:
         self.gm_task_path = {n.id: self._ancestors(n) for n in gm.nodes if n.kind == "task"}
         self.rank = self._execution_rank()
         self._replays: dict[str, tuple[TaskEffects, list[str]] | None] = {}
-        self._start_tests: StartTests = {}  # of the mission decomposition being checked
+        self._start_values = _StartValues()  # of the mission decomposition being checked
         self._noted: set[str] = set()
         self._before: dict[str, set[str]] = {}  # per task, what the constraints put before it
         self._places_of: tuple[set[str] | None, dict[tuple[str, tuple[str, ...], int], list[str]]] = (None, {})
@@ -369,6 +412,10 @@ class _Validator:
         states = self._replay_all(i, keys, errors)
         self._conflicts(i, keys, errors)
         self._conditions(i, keys, states, errors)
+        conflict = self._start_values.conflict()
+        if conflict is not None:
+            errors.append(Violation(i, conflict[0], "one start value of a function the world does not give must "
+                                                    f"meet every comparison on it: {conflict[1]}"))
         self._robots(i, keys, errors)
         self.report.violations.extend(errors)
 
@@ -602,7 +649,7 @@ class _Validator:
         chosen = set(keys)
         entry: dict[str, State] = {}
         self._replays = {}
-        self._start_tests = {}
+        self._start_values = _StartValues()
         for k in sorted(keys, key=self.rank.__getitem__):
             start = self._state_before([k], chosen)
             entry[k] = start
@@ -622,13 +669,22 @@ class _Validator:
             return None
         values = _values(task)
         first_failure: list[str] | None = None
+        chosen: TaskEffects | None = None
+        alternatives: list[StartTests] = []
         for steps in explanations:
             effects, failures, required = self._run_steps(steps, values, start, task.id)
-            if not failures:
-                for key, tests in required.items():
-                    self._start_tests.setdefault(key, []).extend(tests)
-                return effects, []
-            first_failure = first_failure or failures
+            if failures:
+                first_failure = first_failure or failures
+            elif chosen is None or effects == chosen:
+                # the first explanation that runs fixes the effects; those with the same
+                # effects differ only in what they require of unknown start values
+                chosen = chosen or effects
+                if required not in alternatives:
+                    alternatives.append(required)
+        if chosen is not None:
+            if any(alternatives):
+                self._start_values.tasks.append((task.id, alternatives))
+            return chosen, []
         assert first_failure is not None
         for f in first_failure:
             errors.append(Violation(i, task.id, f))
@@ -638,7 +694,7 @@ class _Validator:
                    task: str) -> tuple[TaskEffects, list[str], StartTests]:
         """Replay one explanation; unknown atoms are assumed when first required, and a
         function the world does not give must keep one start value for every task."""
-        replay = _StepReplay(values, start, self._start_tests, task)
+        replay = _StepReplay(values, start, task)
         for step in steps:
             replay.step(step)
         return replay.changed, replay.failures, replay.required
@@ -772,12 +828,9 @@ class _Validator:
         return self._atom(cond, binding, state, goal, required)
 
     def _start_value_meets(self, key: AtomKey, op: str, bound: float, state: State, who: str) -> bool:
-        """Whether the start value of ``key`` can meet ``op bound`` here too (then it must)."""
-        tests = self._start_tests.setdefault(key, [])
-        test = (op, bound - state.offsets.get(key, 0.0), False, who)
-        if not _some_value_meets(tests + [test]):
-            return False
-        tests.append(test)
+        """``op bound`` required of an unknown value: a test of its start value, which the
+        decomposition's other tests must leave possible (checked once all are known)."""
+        self._start_values.fixed.setdefault(key, []).append((op, bound - state.offsets.get(key, 0.0), False, who))
         return True
 
     def _atom(self, atom: Atom, binding: dict[str, tuple[str, ...]], state: State, goal: GMNode,
@@ -792,7 +845,8 @@ class _Validator:
                     bound, op = float(atom.value), atom.op or "="
                     keys = [(m.pred, (v,)) for v in values]
                     return all(_compare(state.values[k], op, bound) if k in state.values
-                               else not required or self._start_value_meets(k, op, bound, state, goal.id)
+                               else not required or self._start_value_meets(k, op, bound, state,
+                                                                            f"achieve condition of goal {goal.id}")
                                for k in keys)
                 facts = [state.facts.get((m.pred, (v,))) for v in values]
                 return all(f is None or f == (not atom.negated) for f in facts)
