@@ -166,7 +166,7 @@ def test_a_full_disk_leaves_no_ihtn_folder_and_names_it(tmp_path: Path):
 def test_a_file_where_the_ihtn_folder_goes_is_refused(tmp_path: Path, capsys):
     (tmp_path / "ihtn").write_text("notes\n")
     assert main(["decompose", str(DELIVERY), "--ihtn", str(tmp_path / "ihtn"), "-q"]) == 2
-    assert f"error: {tmp_path / 'ihtn'}: cannot write the iHTN files: it is a file; give a folder" in \
+    assert f"error: {tmp_path / 'ihtn'}: cannot write the output files: it is a file; give a folder" in \
         capsys.readouterr().err
     assert (tmp_path / "ihtn").read_text() == "notes\n"
 

@@ -289,11 +289,11 @@ def _fake_dot(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, body: str) -> Non
 
 @pytest.mark.skipif(os.name == "nt", reason="uses an executable script as a stand-in for dot")
 def test_render_runs_dot(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    # the stand-in records its arguments and input as the "picture"
+    # the stand-in prints its arguments and input as the "picture", which the render writes
+    # to the target atomically (dot writes nothing itself)
     _fake_dot(tmp_path, monkeypatch,
               "args = sys.argv[1:]\n"
-              "out = args[args.index('-o') + 1]\n"
-              "open(out, 'w').write(' '.join(args[:1]) + '\\n' + sys.stdin.read())")
+              "sys.stdout.write(' '.join(args) + '\\n' + sys.stdin.read())")
     result = render("digraph g { a -> b; }\n", tmp_path / "g.svg")
     assert result.rendered and result.message is None and result.path == tmp_path / "g.svg"
     assert result.path.read_text() == "-Tsvg\ndigraph g { a -> b; }\n"

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import sys
 import time
@@ -21,8 +22,8 @@ from .ihtn import DEFAULT_MAX_FILES
 from .interrupt import phase, signal_handlers
 from .io.text import MB, input_limit
 from .mission import Mission, find_mission_files, world_file
-from .option_types import count_option, seconds, work_units
-from .output_file import refuse_unsafe_outputs, written_together
+from .option_types import count_option, input_file, output_file, output_folder, seconds, work_units
+from .output_file import STDOUT, refuse_unsafe_outputs, staged_outputs
 from .process import (FAILURES, Failure, command_settings, exit_process, failure_lines, failure_problems,
                       failure_status, keep_until_exit, prepare_process, process_ends_with_command, reader_gone)
 from .solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
@@ -167,7 +168,8 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     fleet = Fleet.read(args.fleet)
     travel = _check_fleet(mission, fleet)
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
-    schedule_path = Path(args.schedule) if args.schedule else out_path.with_name("schedule.json")
+    schedule_path = Path(args.schedule) if args.schedule else _default_schedule(out_path)
+    _refuse_two_on_stdout(args, out_path, schedule_path)
     _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
     options = AllocationOptions(objective, args.time_limit, args.workers, args.seed, work_limit=args.work_limit)
     progress = _AllocationProgress(not args.quiet, objective.name)
@@ -176,7 +178,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
             allocation = mission.allocate(fleet, options, progress, travel)
     finally:
         progress.close()
-    with phase("writing the output"), written_together((schedule_path, out_path, args.gantt)):
+    with phase("writing the output"), staged_outputs((schedule_path, out_path, args.gantt)):
         write_schedule(allocation, schedule_path)
         write_decomposition(allocation, out_path, args.format or mission.config.output.file_type)
         if args.gantt:
@@ -192,6 +194,22 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     _summary(args, data, f"{summary_line(allocation)} -> {schedule_path}, {out_path}"
              + (f", {args.gantt}" if args.gantt else "") + f" ({elapsed:.2f} s)", mission)
     return 0
+
+
+def _default_schedule(out_path: Path) -> Path:
+    """``schedule.json`` beside the decomposition (in the current folder when that goes to
+    standard output)."""
+    return Path("schedule.json") if os.fspath(out_path) == STDOUT else out_path.with_name("schedule.json")
+
+
+def _refuse_two_on_stdout(args: argparse.Namespace, out_path: Path, schedule_path: Path) -> None:
+    """Standard output takes one document: the decomposition, the schedule or the summary."""
+    on_stdout = [name for name, path in (("-o", out_path), ("--schedule", schedule_path)) if os.fspath(path) == STDOUT]
+    if getattr(args, "json_summary", False):
+        on_stdout.append("--json-summary")
+    if len(on_stdout) > 1:
+        raise MissionError(f"{' and '.join(on_stdout)} would both print to standard output: send all but one "
+                           "to files")
 
 
 def _default_output(mission: Mission, folder: Path | None) -> Path:
@@ -300,7 +318,8 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     if args.json_style == "standard" and file_type != "json":
         raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
                            "drop --json-style or write JSON (--format json)")
-    _refuse_inputs_as_output((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg))
+    _refuse_inputs_as_output((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg, args.costs),
+                             folders=(args.ihtn,))
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
     progress = _Progress(not args.quiet, f"mission decompositions: {label}")
     with phase("expanding the mission"):
@@ -376,12 +395,13 @@ def _output_format(args: argparse.Namespace, mission: Mission) -> str:
 
 
 def cmd_graph(args: argparse.Namespace) -> int:
-    from .render import render, view_dot
+    from .render import render, render_targets, view_dot
 
     hddl, gm, cfg, _folder = _inputs(args)
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     _warn(args, mission)
+    _refuse_inputs_as_output(render_targets(args.output), mission, (hddl, gm, cfg))
     result = render(view_dot(mission, args.view, args.index), args.output)
     if result.message:
         print(result.message, file=sys.stderr)
@@ -405,10 +425,10 @@ def _print_warning(warning: str) -> None:
 
 
 def _refuse_inputs_as_output(outputs: Sequence[Path | str | None], mission: Mission,
-                             inputs: tuple[Path, ...]) -> None:
+                             inputs: tuple[Path | str | None, ...], folders: Sequence[Path | str | None] = ()) -> None:
     """Outputs that are inputs of the mission (the world included) or one another, or folders:
     refused before anything is computed or written (``output_file.refuse_unsafe_outputs``)."""
-    refuse_unsafe_outputs(outputs, (*inputs, mission.world_path))
+    refuse_unsafe_outputs(outputs, (*inputs, mission.world_path), folders)
 
 
 def cmd_count(args: argparse.Namespace) -> int:
@@ -441,7 +461,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = _inputs(args)
     if args.plot:
         plot_format(args.plot)  # before anything runs
-        refuse_unsafe_outputs((args.plot,), (hddl, gm, cfg))
+        world = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml).world_path
+        refuse_unsafe_outputs((args.plot,), (hddl, gm, cfg, world))
     original = None
     if args.original:
         found = shutil.which(args.original)
@@ -480,14 +501,14 @@ def build_parser() -> argparse.ArgumentParser:
         """Which mission: its three files, or its folder and the files to pick there."""
         p.add_argument("inputs", nargs="+", metavar="INPUT",
                        help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
-        p.add_argument("--config", help="in a mission folder with several configurations, the one to use")
-        p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
-        p.add_argument("--gm", help="in a mission folder with several goal models, the one to use")
+        p.add_argument("--config", type=input_file, help="in a mission folder with several configurations, the one to use")
+        p.add_argument("--hddl", type=input_file, help="in a mission folder with several HDDL files, the one to use")
+        p.add_argument("--gm", type=input_file, help="in a mission folder with several goal models, the one to use")
 
     def common(p: argparse.ArgumentParser) -> None:
         mission_inputs(p)
         reading(p)
-        p.add_argument("--world", metavar="FILE",
+        p.add_argument("--world", metavar="FILE", type=input_file,
                        help="read the world knowledge from FILE instead of the configuration's world_db.path")
         p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
         p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
@@ -495,12 +516,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
     common(p)
     p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
-    p.add_argument("--fleet", metavar="FLEET.json", help="also check a fleet file against the mission")
+    p.add_argument("--fleet", metavar="FLEET.json", type=input_file, help="also check a fleet file against the mission")
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("decompose", help="decompose the mission and write the output file")
     common(p)
-    p.add_argument("-o", "--output", help="output file (overrides the configuration's output.file_path)")
+    p.add_argument("-o", "--output", type=output_file,
+                   help="output file (overrides the configuration's output.file_path)")
     p.add_argument("--format", choices=("json", "xml"),
                    help="output format (default: the suffix of -o, .json or .xml, else the configuration's)")
     p.add_argument("--json-style", choices=("boost", "standard"), default="boost",
@@ -514,10 +536,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=count_option(0), default=0, help="random seed for --sample (default 0)")
     p.add_argument("--optimize", action="store_true",
                    help="cpsat: output the decomposition of least cost (fewest actions, or --costs)")
-    p.add_argument("--costs", metavar="FILE", help='JSON cost file {"actions": {...}, "methods": {...}}')
+    p.add_argument("--costs", metavar="FILE", type=input_file, help='JSON cost file {"actions": {...}, "methods": {...}}')
     p.add_argument("--explain", action="store_true",
                    help="cpsat: when no decomposition exists, name the conflicting goals, tasks and facts")
-    p.add_argument("--ihtn", metavar="DIR", help="write one iHTN file per ordering of each valid decomposition "
+    p.add_argument("--ihtn", metavar="DIR", type=output_folder,
+                   help="write one iHTN file per ordering of each valid decomposition "
                                                  "into DIR instead of the output file")
     p.add_argument("--ihtn-orderings", choices=("all", "one"), default="all",
                    help="--ihtn: every ordering of each decomposition (default), or only the first consistent one")
@@ -527,12 +550,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("allocate", help="choose the decomposition, the robots and the schedule together")
     common(p)
-    p.add_argument("--fleet", required=True, metavar="FLEET.json", help="the robots, durations and travel (JSON)")
-    p.add_argument("-o", "--output", help="the chosen decomposition, in the output format (default: the "
+    p.add_argument("--fleet", required=True, metavar="FLEET.json", type=input_file,
+                   help="the robots, durations and travel (JSON)")
+    p.add_argument("-o", "--output", type=output_file, help="the chosen decomposition, in the output format (default: the "
                                           "configuration's output.file_path)")
     p.add_argument("--format", choices=("json", "xml"), help="format of -o (default: the configuration's)")
-    p.add_argument("--schedule", metavar="FILE", help="the schedule (default: schedule.json beside -o)")
-    p.add_argument("--gantt", metavar="FILE.png|svg", help="also draw the schedule (needs matplotlib)")
+    p.add_argument("--schedule", metavar="FILE", type=output_file, help="the schedule (default: schedule.json beside -o)")
+    p.add_argument("--gantt", metavar="FILE.png|svg", type=output_file, help="also draw the schedule (needs matplotlib)")
     p.add_argument("--objective", default="makespan", metavar="makespan|travel|weighted:A,B",
                    help="minimise the makespan (default), the total travel, or A * makespan + B * travel")
     limit = p.add_mutually_exclusive_group()
@@ -570,7 +594,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--original", metavar="PATH",
                    help="also run this binary of the original tool (as PATH HDDL GM CONFIG, in a copy of the mission)")
     p.add_argument("--json", action="store_true", help="print the report as one JSON object instead of a table")
-    p.add_argument("--plot", metavar="FILE", help="bar chart of time and memory: FILE.png, .svg or .pdf (needs matplotlib)")
+    p.add_argument("--plot", metavar="FILE", type=output_file, help="bar chart of time and memory: FILE.png, .svg or .pdf (needs matplotlib)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=cmd_compare)
 
@@ -578,16 +602,19 @@ def build_parser() -> argparse.ArgumentParser:
     common(p)
     p.add_argument("--view", choices=("goal-model", "task-graph", "decomposition"), default="task-graph")
     p.add_argument("--index", type=int, default=0, help="decomposition view: which valid decomposition (0-based)")
-    p.add_argument("-o", "--output", required=True, help="FILE.svg, FILE.png (needs graphviz) or FILE.dot")
+    p.add_argument("-o", "--output", required=True, type=output_file,
+                   help="FILE.svg, FILE.png (needs graphviz) or FILE.dot")
     p.set_defaults(func=cmd_graph)
 
     p = sub.add_parser("export-hddl", help="write the domain (and the mission's problem) as standard HDDL")
     p.add_argument("input", metavar="INPUT", help="the HDDL domain, or a mission folder")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.hddl", help="the standard HDDL domain to write")
-    p.add_argument("--gm", help="the goal model (with --config: also write the problem); in a folder, which one")
-    p.add_argument("--config", help="the configuration (with --gm); in a mission folder, which one")
-    p.add_argument("--hddl", help="in a mission folder with several HDDL files, the one to use")
-    p.add_argument("--problem-out", metavar="FILE", help="the problem file (default OUT-problem.hddl); exit 2 "
+    p.add_argument("-o", "--output", required=True, metavar="OUT.hddl", type=output_file,
+                   help="the standard HDDL domain to write")
+    p.add_argument("--gm", type=input_file,
+                   help="the goal model (with --config: also write the problem); in a folder, which one")
+    p.add_argument("--config", type=input_file, help="the configuration (with --gm); in a mission folder, which one")
+    p.add_argument("--hddl", type=input_file, help="in a mission folder with several HDDL files, the one to use")
+    p.add_argument("--problem-out", metavar="FILE", type=output_file, help="the problem file (default OUT-problem.hddl); exit 2 "
                                                          "when the mission has no problem form")
     reading(p)
     p.add_argument("-q", "--quiet", action="store_true", help="no warnings and no summary on stderr")

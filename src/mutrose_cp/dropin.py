@@ -112,11 +112,12 @@ def parse(argv: Sequence[str], environ: Mapping[str, str] = os.environ, out: IO[
 
 
 def _openable(files: Sequence[str]) -> None:
-    """The original opens the three files first: the first that cannot be opened is named."""
+    """The original opens the three files first: the first that cannot be opened is named.
+    They are opened without waiting (a FIFO without a writer would block the open); a file that
+    opens but is not a regular file is refused, located, when it is read."""
     for path in files:
         try:
-            with open(path, "rb"):
-                pass
+            os.close(os.open(path, os.O_RDONLY | os.O_NONBLOCK))
         except OSError:
             raise Usage(f"I can't open {path}!", 2) from None
 

@@ -17,7 +17,7 @@ from .hddl_problem import ProblemNotExpressible, mission_problem
 from .io.hddl import load_domain
 from .io.hddl_writer import HddlExport
 from .mission import Mission, find_mission_files
-from .output_file import atomic_writer, refuse_unsafe_outputs, written_together
+from .output_file import STDOUT, atomic_writer, refuse_unsafe_outputs, staged_outputs
 
 
 def _mission_files(args: argparse.Namespace) -> tuple[Path, tuple[Path, Path] | None]:
@@ -36,8 +36,13 @@ def _mission_files(args: argparse.Namespace) -> tuple[Path, tuple[Path, Path] | 
 
 
 def _problem_path(args: argparse.Namespace) -> Path:
+    """``--problem-out``, else ``OUT-problem.hddl`` beside the domain; with the domain on
+    standard output (``-o -``) the problem needs a file of its own."""
     if args.problem_out:
         return Path(args.problem_out)
+    if args.output == STDOUT:
+        raise MissionError("-o - prints the domain; the mission's problem needs a file of its own: give "
+                           "--problem-out FILE (or --problem-out - to print it after the domain)")
     out = Path(args.output)
     return out.with_name(f"{out.stem}-problem{out.suffix or '.hddl'}")
 
@@ -65,6 +70,7 @@ def export_hddl(args: argparse.Namespace) -> int:
     hddl, mission_files = _mission_files(args)
     if args.problem_out and mission_files is None:
         raise MissionError("--problem-out needs the mission: give --gm GM and --config CONFIG, or a mission folder")
+    refuse_unsafe_outputs([args.output], [hddl, *(mission_files or ())])  # before a problem path is made of it
     outputs = [Path(args.output), *([_problem_path(args)] if mission_files else [])]
     refuse_unsafe_outputs(outputs, [hddl, *(mission_files or ())])
     mission = Mission.load(hddl, *mission_files, lenient_xml=args.lenient_xml) if mission_files else None
@@ -73,7 +79,7 @@ def export_hddl(args: argparse.Namespace) -> int:
     export = HddlExport(mission.domain if mission is not None else load_domain(hddl))
     written = []
     texts = _texts(args, export, mission)
-    with written_together(outputs[:len(texts)]):
+    with staged_outputs(outputs[:len(texts)]):  # both files, or neither
         for what, path, text in zip(("domain", "problem"), outputs, texts):
             with atomic_writer(path) as out:
                 out.write(text)

@@ -50,3 +50,37 @@ def work_units(text: str) -> float:
     """An argparse type: a finite positive number of units of deterministic work (about a second
     each, see ``allocate/budget.py``), at most ``MAX_SECONDS``."""
     return _positive(text, "units of work")
+
+
+# ---------------------------------------------------------------------------------------------
+# Paths.  Every option that names a file says which kind of file with its type, so that the
+# output rules (output_file.refuse_unsafe_outputs) can be applied to all of them and a test can
+# find them all in the parser (tests/test_command_outputs.py).
+
+
+def output_file(text: str) -> str:
+    """An argparse type: a file a command writes (``-`` is standard output).  An empty path, and
+    one that ends with ``/`` (a folder), name no file."""
+    if not text:
+        raise argparse.ArgumentTypeError("the path is empty: give a file name")
+    if text.endswith("/"):
+        raise argparse.ArgumentTypeError(f"{text} ends with /, so it names a folder: give a file name "
+                                         f"(for example {text}out.json)")
+    return text
+
+
+def output_folder(text: str) -> str:
+    """An argparse type: a folder a command writes files into."""
+    if not text:
+        raise argparse.ArgumentTypeError("the path is empty: give a folder")
+    return text
+
+
+def input_file(text: str) -> str:
+    """An argparse type: a file a command reads."""
+    if not text:
+        raise argparse.ArgumentTypeError("the path is empty: give a file name")
+    return text
+
+
+PATH_TYPES = (output_file, output_folder, input_file)

@@ -28,6 +28,7 @@ from .annotation_tree import GOAL, OPERATOR, TASK, RatNode
 from .constraints import EC, FB, SEQ
 from .errors import MissionError, NoDecompositionError
 from .model.task_graph import DecompositionVertex, EdgeKind, GoalVertex, OperatorVertex, ScopeVertex, TaskVertex
+from .output_file import atomic_writer
 
 if TYPE_CHECKING:  # pragma: no cover
     from .constraints import Constraint
@@ -668,6 +669,16 @@ INSTALL_HINT = ("install Graphviz to render pictures (Debian/Ubuntu: apt-get ins
                 "macOS: brew install graphviz; https://graphviz.org/download/)")
 
 
+def render_targets(path: str | os.PathLike[str]) -> list[Path]:
+    """The files :func:`render` may write for ``path``: the file itself, or the ``.dot`` text
+    beside it when Graphviz is missing (checked with the command's other outputs before any
+    work)."""
+    target = Path(path)
+    if target.suffix.lower() in IMAGE_SUFFIXES and shutil.which("dot") is None:
+        return [target.with_suffix(".dot")]
+    return [target]
+
+
 def render(dot_text: str, path: str | os.PathLike[str], *, timeout: float | None = 300) -> RenderResult:
     """Write ``dot_text`` to ``path``: as is for ``.dot``/``.gv``; for ``.svg``/``.png``/``.pdf``
     through the Graphviz ``dot`` program.  If ``dot`` is not on ``PATH``, the DOT text is written
@@ -689,9 +700,8 @@ def render(dot_text: str, path: str | os.PathLike[str], *, timeout: float | None
                             f"Graphviz 'dot' was not found, so {target} was not drawn; the graph was written "
                             f"to {fallback} instead. To draw it, {INSTALL_HINT}, then run: "
                             f"dot -T{suffix[1:]} {fallback} -o {target}")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        proc = subprocess.run([exe, f"-T{suffix[1:]}", "-o", str(target)], input=dot_text.encode("utf-8"),
+    try:  # the picture comes back on dot's stdout, and is written as any output (atomically)
+        proc = subprocess.run([exe, f"-T{suffix[1:]}"], input=dot_text.encode("utf-8"),
                               capture_output=True, timeout=timeout, check=False)
     except subprocess.TimeoutExpired:
         raise RenderError(f"Graphviz took longer than {timeout:.0f} s; the graph is too large to draw "
@@ -701,13 +711,14 @@ def render(dot_text: str, path: str | os.PathLike[str], *, timeout: float | None
     if proc.returncode != 0:
         detail = proc.stderr.decode("utf-8", "replace").strip().splitlines()
         raise RenderError("Graphviz dot failed" + (f": {detail[-1]}" if detail else ""), str(target))
+    with atomic_writer(target, "wb") as fh:
+        fh.write(proc.stdout)
     return RenderResult(target, True)
 
 
 def _write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", encoding="utf-8", newline="\n") as fh:
-        fh.write(text)
+    with atomic_writer(path, "wb") as fh:
+        fh.write(text.encode("utf-8"))
 
 
 def view_dot(mission: "Mission", view: str, index: int = 0, rankdir: str | None = None) -> str:
