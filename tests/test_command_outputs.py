@@ -142,7 +142,7 @@ def test_dropin_never_writes_its_output_over_an_input(tmp_path: Path):
                           "gm/hospital-disinfection-gm.json", "configuration/configuration.json"],
                          cwd=mission, capture_output=True, text=True, timeout=120, env=dict(os.environ))
     assert run.returncode == 2
-    assert "knowledge/world_db.xml: the output would overwrite the input" in run.stdout
+    assert "knowledge/world_db.xml: the output would overwrite the input" in run.stderr
     assert (mission / "knowledge" / "world_db.xml").read_bytes() == world
 
 
@@ -179,11 +179,11 @@ def test_a_file_where_the_ihtn_folder_goes_is_refused(tmp_path: Path, capsys):
 def test_both_front_ends_tell_a_failure_alike(capsys, front_end: str):
     from mutrose_cp import cli, dropin
 
-    report, stream = (cli._report, "err") if front_end == "mutrose-cp" else (dropin._report, "out")
+    report = cli._report if front_end == "mutrose-cp" else dropin._report
     assert report(OSError(errno.EFBIG, "File too large")) == 2  # a write error without a file name
     assert report(OSError(errno.ENOENT, "No such file or directory", "gm.json")) == 2
     assert report(MissionError("unknown goal", "gm.json: goal G3")) == 2
-    printed = getattr(capsys.readouterr(), stream).splitlines()
+    printed = capsys.readouterr().err.splitlines()  # both on stderr
     assert printed == ["error: File too large", "error: gm.json: No such file or directory",
                        "error: gm.json: goal G3: unknown goal"]
 

@@ -154,7 +154,7 @@ def test_the_package_installs_the_mutrose_command():
     installed = Path(sys.executable).parent / "mutrose"
     if installed.exists():  # an installed package (CI): the script itself answers
         run = subprocess.run([str(installed)], capture_output=True, text=True, timeout=60)
-        assert (run.returncode, run.stdout) == (1, MISSING[0] + "\n")
+        assert (run.returncode, run.stdout, run.stderr) == (1, "", MISSING[0] + "\n")
 
 
 # -- the command line, in process ----------------------------------------------------------------
@@ -163,7 +163,7 @@ def test_the_package_installs_the_mutrose_command():
 def test_unknown_options_are_reported_and_ignored(capsys):
     inv = parse(["d.hddl", "gm.txt", "c.json", "-x", "-p", "--quiet"], {})
     assert inv == Invocation(("d.hddl", "gm.txt", "c.json"), pretty=True)
-    assert capsys.readouterr().out == "\nUnknown option [-x]\nUnknown option [--quiet]\n\n"
+    assert capsys.readouterr().err == "\nUnknown option [-x]\nUnknown option [--quiet]\n\n"
 
 
 @pytest.mark.parametrize("argv,message,status", [
@@ -177,7 +177,8 @@ def test_unknown_options_are_reported_and_ignored(capsys):
 ])
 def test_usage_errors_have_the_original_messages_and_statuses(argv, message, status, capsys):
     assert main(argv) == status
-    assert capsys.readouterr().out.strip() == message
+    captured = capsys.readouterr()  # on stderr, which the plug-in shows when the command fails
+    assert captured.err.strip() == message and captured.out == ""
 
 
 def test_the_decomposer_is_chosen_by_environment_or_option():
@@ -193,16 +194,18 @@ def test_an_unopenable_file_is_named_as_the_original_names_it(tmp_path, capsys, 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "d.hddl").write_text("")
     assert main(["d.hddl", "missing.txt", "c.json", "-p"]) == 2
-    assert capsys.readouterr().out == "I can't open missing.txt!\n"
+    assert capsys.readouterr().err == "I can't open missing.txt!\n"
 
 
-def test_bad_input_gives_located_errors_on_stdout_without_traceback(mission, capsys, monkeypatch):
+def test_bad_input_gives_located_errors_on_stderr_without_traceback(mission, capsys, monkeypatch):
     monkeypatch.chdir(mission)
     hddl = next((mission / "hddl").glob("*.hddl"))
     hddl.write_text(hddl.read_text().replace("(:method", "(:methd", 1))
     hddl_arg, gm, cfg = (str(p.relative_to(mission)) for p in find_mission_files(mission))
     assert main([hddl_arg, gm, cfg]) == 2
-    out = capsys.readouterr().out
+    captured = capsys.readouterr()
+    out = captured.err
+    assert captured.out == ""
     assert re.search(rf"^error: {re.escape(hddl_arg)}:\d+:\d+: ", out, re.M), out
     assert "Traceback" not in out and not (mission / "output").exists()
 
@@ -212,7 +215,7 @@ def test_an_oversized_ihtn_export_is_refused_before_writing(tmp_path, capsys, mo
     monkeypatch.chdir(folder)
     files = [str(p.relative_to(folder)) for p in find_mission_files(folder)]
     assert main([*files, "-h", "--ihtn-max=719"]) == 2
-    out = capsys.readouterr().out
+    out = capsys.readouterr().err
     assert "error: ihtn: the iHTN export would write 720 files, over --ihtn-max 719" in out
     assert "raise the bound with --ihtn-max=N" in out and "--limit" not in out  # only what mutrose takes
     assert not (folder / "ihtn").exists() or not any((folder / "ihtn").iterdir())

@@ -12,16 +12,19 @@ runs ``mutrose HDDL GM CONFIG`` in its mission folder and reads the file at the 
   format; ``-h`` writes ``./ihtn/ihtn_<n>.json`` instead (at most ``--ihtn-max=N`` files,
   10000 by default: a larger export is refused before anything is written);
 * ``-p`` prints the three blocks, ``-v`` a trace; both together are refused (status 1);
+* ``-h`` owns ``./ihtn``, as the original: it is emptied and refilled;
 * an unknown option is reported as ``Unknown option [x]`` and ignored;
 * missing arguments print the original's message (status 1), an unopenable file
   ``I can't open <path>!`` (status 2).
 
 Where the original aborts (invalid input, no valid decomposition) this command prints located
-errors on stdout, where the plug-in reads them, and exits with mutrose-cp's status: 2 for
-invalid input, 3 for a mission without any valid decomposition.
+errors on stderr, which the plug-in shows when a command fails (Node's ``Command failed`` and
+stderr), and exits with mutrose-cp's status: 2 for invalid input, 3 for a mission without any
+valid decomposition.  Warnings and ``Unknown option [x]`` go to stderr too; stdout carries the
+``-p`` blocks and the ``-v`` trace only.
 
-The CP-SAT decomposer lists every valid decomposition (as the original does); ``MUTROSE_ALGORITHM=
-exploratory`` in the environment, or the option ``--algorithm=exploratory``, selects the
+The CP-SAT decomposer lists every valid decomposition (as the original does), sorted into the
+original's order (:mod:`.solve.listing_order`); ``MUTROSE_ALGORITHM=exploratory`` in the environment, or the option ``--algorithm=exploratory``, selects the
 original's explicit combination instead.
 """
 from __future__ import annotations
@@ -103,7 +106,7 @@ def parse(argv: Sequence[str], environ: Mapping[str, str] = os.environ, out: IO[
         else:
             unknown.append(opt)
     if unknown:
-        print("\n" + "".join(f"Unknown option [{opt}]\n" for opt in unknown), file=out or sys.stdout)
+        print("\n" + "".join(f"Unknown option [{opt}]\n" for opt in unknown), file=out or sys.stderr)
     if flags["-v"] and flags["-p"]:
         raise Usage("Options -v and -p cannot be used together!", 1)
     if len(files) < 3:
@@ -145,6 +148,13 @@ def run(inv: Invocation, out: IO[str] | None = None) -> int:
     with phase("solving"):
         result = mission.decompose(_every_decomposition(inv.algorithm))
     decompositions: Iterable[list[int]] = result.decompositions
+    if inv.algorithm != Algorithm.EXPLORATORY:
+        # in the original's order, whichever decomposer listed them: mission_decompositions[N]
+        # and ihtn_N.json are the original's (solve/listing_order.py)
+        from .solve.listing_order import ExploratoryOrder
+
+        with phase("ordering the decompositions"):
+            decompositions = sorted(decompositions, key=ExploratoryOrder(tg).key)
     # listed in memory only when read more than once (the prints, the iHTN counting); the output
     # file alone streams them
     if inv.verbose or inv.pretty or inv.ihtn:
@@ -192,14 +202,15 @@ def _write_ihtns(model: OutputModel, maximum: int) -> None:
                                 "(-h writes every ordering of every valid decomposition), or use mutrose-cp "
                                 f"decompose --ihtn {IHTN_FOLDER} --ihtn-orderings one")
     with phase("exporting iHTNs"):
-        write_ihtns(model, IHTN_FOLDER)
+        write_ihtns(model, IHTN_FOLDER, owned=True)
 
 
 def _report(err: Failure) -> int:
-    """Why the command stopped, on stdout as the original prints its messages (the plug-in
-    shows stdout), and the exit status."""
+    """Why the command stopped, on stderr, and the exit status.  The plug-in runs the command
+    through Node's ``exec`` and shows ``Command failed: <cmd>`` followed by its stderr when it
+    fails: what is printed there is what the user sees."""
     for line in failure_lines(err):
-        print(line)
+        print(line, file=sys.stderr)
     return failure_status(err)
 
 
@@ -218,7 +229,7 @@ def _command(argv: list[str]) -> int:
         inv = parse(argv)
         _openable(inv.files)
     except Usage as usage:
-        print(usage)
+        print(usage, file=sys.stderr)
         return usage.status
     try:
         with signal_handlers(), input_limit(INPUT_LIMIT_MB * MB):

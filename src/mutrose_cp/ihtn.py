@@ -287,20 +287,22 @@ def _how_many_files(model: OutputModel, one: bool, limit: int) -> str:
 
 
 def write_ihtns(model: OutputModel, folder: Path, progress: Callable[[int], None] | None = None, *,
-                one_per_decomposition: bool = False) -> int:
+                one_per_decomposition: bool = False, owned: bool = False) -> int:
     """Write ``ihtn_<n>.json`` files into ``folder``, all or nothing.
 
     The files are built in a temporary folder beside ``folder`` and then moved in under a lock,
     with SIGINT and SIGTERM held back for those few renames; old ``ihtn_<n>.json`` files that
-    the new export does not replace are removed.  No other file of ``folder`` is touched, and
-    two concurrent exports leave the whole result of one of them.  A failed or interrupted
-    export leaves no folder it created; a write error (a full disk) is located at ``folder``."""
+    the new export does not replace are removed.  No other file of ``folder`` is touched,
+    unless the folder is ``owned`` (the drop-in's ``./ihtn``, which the original empties): then
+    every other entry goes too.  Two concurrent exports leave the whole result of one of them.
+    A failed or interrupted export leaves no folder it created; a write error (a full disk) is
+    located at ``folder``."""
     if folder.exists() and not folder.is_dir():
         raise MissionError("cannot write the iHTN files: it is a file; give a folder", str(folder))
     created = not folder.exists()
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        return _export(model, folder, progress, one_per_decomposition)
+        return _export(model, folder, progress, one_per_decomposition, owned)
     except BaseException as err:
         if created:
             _remove_if_empty(folder)
@@ -317,7 +319,7 @@ def _remove_if_empty(folder: Path) -> None:
 
 
 def _export(model: OutputModel, folder: Path, progress: Callable[[int], None] | None,
-            one_per_decomposition: bool) -> int:
+            one_per_decomposition: bool, owned: bool) -> int:
     """Stage the files beside ``folder``, then swap them in (see :func:`write_ihtns`)."""
     succ, ec = _constraint_index(model)
     staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=folder.parent))
@@ -336,7 +338,7 @@ def _export(model: OutputModel, folder: Path, progress: Callable[[int], None] | 
                     progress(count)
                 if one_per_decomposition:
                     break
-        _swap_in(staging, folder, count)
+        _swap_in(staging, folder, count, owned)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return count
@@ -359,8 +361,9 @@ def _ihtn_nodes(model: OutputModel, order: list[int], agents: _Agents) -> IhtnNo
     return nodes
 
 
-def _swap_in(staging: Path, folder: Path, count: int) -> None:
-    """Move the staged files into ``folder`` and drop its other ``ihtn_<n>.json`` files."""
+def _swap_in(staging: Path, folder: Path, count: int, owned: bool) -> None:
+    """Move the staged files into ``folder`` and drop its other ``ihtn_<n>.json`` files (every
+    other entry of an ``owned`` folder)."""
     lock = os.open(folder, os.O_RDONLY)  # the folder itself is the lock: nothing is left behind
     try:
         fcntl.flock(lock, fcntl.LOCK_EX)
@@ -369,7 +372,11 @@ def _swap_in(staging: Path, folder: Path, count: int) -> None:
             for n in range(1, count + 1):
                 os.replace(staging / f"ihtn_{n}.json", folder / f"ihtn_{n}.json")
             for old in folder.iterdir():
-                if IHTN_FILE.fullmatch(old.name) and int(old.name[5:-5]) > count:
+                if IHTN_FILE.fullmatch(old.name) and int(old.name[5:-5]) <= count:
+                    continue  # just written
+                if owned and old.is_dir() and not old.is_symlink():
+                    shutil.rmtree(old)
+                elif owned or IHTN_FILE.fullmatch(old.name):
                     old.unlink()
         finally:
             signal.pthread_sigmask(signal.SIG_SETMASK, held)
