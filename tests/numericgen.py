@@ -187,7 +187,7 @@ class _Runner:
 
     def room(self, index: int, start: Fraction) -> set[tuple[tuple[str, ...], ...]]:
         """The valid runs of the sequence for one room from ``start``: the actions of each task."""
-        order = [n.task for n in _task_nodes(self.spec.tree)]
+        order = [n.task for n in self.spec.task_nodes()]
         runs: list[tuple[tuple[tuple[str, ...], ...], Fraction]] = [((), start)]
         for name in order:
             runs = [(done + (steps,), after) for done, value in runs for steps, after in self.task(name, value)]
@@ -196,14 +196,6 @@ class _Runner:
             _, op, bound = condition.split()
             runs = [r for r in runs if _holds(r[1], op, _number(float(bound)))]
         return {done for done, _ in runs}
-
-
-def _task_nodes(node) -> Iterator[TaskNode]:
-    for child in node.children:
-        if isinstance(child, TaskNode):
-            yield child
-        else:
-            yield from _task_nodes(child)
 
 
 def brute_force(spec: MissionSpec) -> set[Signature]:
@@ -220,11 +212,23 @@ def brute_force(spec: MissionSpec) -> set[Signature]:
     return {frozenset().union(*combo) for combo in itertools.product(*per_room)}
 
 
+def _actions_of(task: dict) -> list[str]:
+    return [a["name"] for a in (task["decomposition"] or {}).values()]
+
+
+def decomposition_actions(document: dict) -> dict[str, list[str]]:
+    """An output file's task decompositions: id (``AT1_1|2``) -> its action names."""
+    return {t["id"]: _actions_of(t) for t in document["tasks"].values()}
+
+
+def valid_decompositions(document: dict) -> set[frozenset[str]]:
+    """An output file's valid mission decompositions, as sets of decomposition ids."""
+    ids = {key: task["id"] for key, task in document["tasks"].items()}
+    return {frozenset(ids[k] for k in md) for md in document["mission_decompositions"]}
+
+
 def signatures(document: dict) -> set[Signature]:
     """The valid mission decompositions of an output file, as :func:`brute_force` gives them."""
     tasks = document["tasks"]
-
-    def actions(key: str) -> tuple[str, ...]:
-        return tuple(a["name"] for a in (tasks[key]["decomposition"] or {}).values())
-
-    return {frozenset((tasks[k]["id"].split("|")[0], actions(k)) for k in md) for md in document["mission_decompositions"]}
+    return {frozenset((tasks[k]["id"].split("|")[0], tuple(_actions_of(tasks[k]))) for k in md)
+            for md in document["mission_decompositions"]}

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pytest
 
+import numericgen
+
 ROOT = Path(__file__).resolve().parents[1]
 ORIGINAL = Path(os.environ.get("MUTROSE_ORIGINAL", ROOT.parent / "shared" / "original" / "MutroseMissionDecomposer"))
 
@@ -38,16 +40,11 @@ class OriginalRun:
 
     def valid_decompositions(self) -> set[frozenset[str]]:
         """The valid mission decompositions as sets of decomposition ids (``AT1_1|2``)."""
-        if self.output is None:
-            return set()
-        ids = {key: task["id"] for key, task in self.output["tasks"].items()}
-        return {frozenset(ids[k] for k in md) for md in self.output["mission_decompositions"]}
+        return set() if self.output is None else numericgen.valid_decompositions(self.output)
 
     def actions(self) -> dict[str, list[str]]:
         """Decomposition id -> its action names."""
-        if self.output is None:
-            return {}
-        return {t["id"]: [a["name"] for a in (t["decomposition"] or {}).values()] for t in self.output["tasks"].values()}
+        return {} if self.output is None else numericgen.decomposition_actions(self.output)
 
 
 def run(folder: Path, hddl: Path, gm: Path, config: Path, timeout: float = 20.0) -> OriginalRun:

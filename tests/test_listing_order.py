@@ -12,7 +12,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 import missiongen
-from conftest import REFERENCE, require_reference
+from conftest import require_reference
+from test_conformance import _cases
 from mutrose_cp.errors import NoDecompositionError
 from mutrose_cp.mission import Mission, find_mission_files
 from mutrose_cp.solve.listing_order import ExploratoryOrder
@@ -30,19 +31,11 @@ def _both_in_order(mission: Mission) -> tuple[list[list[int]], list[list[int]]]:
     return explored, listed
 
 
-def _corpus() -> list:
-    base = REFERENCE / "missions"
-    if not base.is_dir():
-        return [pytest.param(None, None, id="corpus-missing")]
-    return [pytest.param(folder, cfg.name, id=f"{folder.name}/{cfg.stem}")
-            for folder in sorted(base.iterdir()) for cfg in sorted((folder / "configuration").glob("*.json"))]
-
-
-@pytest.mark.parametrize(("folder", "config"), _corpus())
+@pytest.mark.parametrize(("folder", "config"), _cases("missions"))
 def test_sorted_listing_is_the_exploratory_order_on_the_corpus(folder, config, monkeypatch):
     require_reference()
     monkeypatch.chdir(folder)
-    explored, listed = _both_in_order(Mission.load(*find_mission_files(folder, config)))
+    explored, listed = _both_in_order(Mission.load(*find_mission_files(folder, config.name)))
     assert listed == explored
 
 

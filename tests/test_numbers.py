@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 import original
+from numericgen import decomposition_actions as _actions, valid_decompositions as _valid
 from missiongen import Action, Change, Cmp, GoalNode, Method, MissionSpec, Room, Task, TaskNode
 from mutrose_cp.cli import main
 from mutrose_cp.io.decomposition_output import load_decomposition_output
@@ -59,15 +60,6 @@ def _decompose(spec: MissionSpec, folder: Path) -> dict[str, tuple[int, dict | N
             assert report.valid, [str(v) for v in report.violations]
         out[algorithm] = (status, document)
     return out
-
-
-def _valid(document: dict) -> set[frozenset[str]]:
-    ids = {k: t["id"] for k, t in document["tasks"].items()}
-    return {frozenset(ids[k] for k in md) for md in document["mission_decompositions"]}
-
-
-def _actions(document: dict) -> dict[str, list[str]]:
-    return {t["id"]: [a["name"] for a in (t["decomposition"] or {}).values()] for t in document["tasks"].values()}
 
 
 def _both(spec: MissionSpec, folder: Path) -> tuple[int, dict | None]:

@@ -19,6 +19,10 @@ from pathlib import Path
 
 import pytest
 
+from conftest import require_reference
+from mutrose_cp.mission import find_mission_files
+from test_conformance import _cases, _golden_path
+
 ROOT = Path(__file__).resolve().parent.parent
 DELIVERY = ROOT / "examples" / "item-delivery"
 BIN = Path(sys.executable).parent
@@ -78,24 +82,10 @@ def test_a_second_ihtn_run_leaves_only_its_own_files(tmp_path: Path):
     assert sorted(p.name for p in (root / "ihtn").iterdir()) == written
 
 
-def _reference_cases() -> list:
-    from conftest import REFERENCE
-
-    base = REFERENCE / "missions"
-    if not base.is_dir():
-        return [pytest.param(None, None, id="corpus-missing")]
-    return [pytest.param(folder, cfg, id=f"{folder.name}/{cfg.name}")
-            for folder in sorted(base.iterdir()) for cfg in sorted((folder / "configuration").iterdir())]
-
-
-@pytest.mark.parametrize(("mission", "cfg"), _reference_cases())
+@pytest.mark.parametrize(("mission", "cfg"), _cases("missions"))
 def test_the_default_drop_in_writes_the_goldens_byte_for_byte(mission, cfg, tmp_path: Path):
     """With the default (CP-SAT) decomposer, the listing is sorted into the original's order:
     ``mission_decompositions[N]`` is the original's, on food-logistics Delivery too."""
-    from conftest import require_reference
-    from mutrose_cp.mission import find_mission_files
-    from test_conformance import _golden_path
-
     require_reference()
     folder = tmp_path / mission.name
     shutil.copytree(mission, folder, ignore=shutil.ignore_patterns("output", "ihtn"))

@@ -20,7 +20,7 @@ from typing import Callable, Mapping, Sequence
 
 from .conditions import compare
 from .errors import MissionError
-from .model import AbstractTask, Action, Comparison, Domain, Literal, Method, NumericEffect
+from .model import AbstractTask, Action, Comparison, Domain, Literal, Method, NumericEffect, show_precondition
 
 PSEUDO_PREFIX = "__method_precondition_"
 MAX_RECURSION = 64  # recursive methods must be guarded by a numeric function
@@ -491,12 +491,6 @@ class _PathGenerator:
         return out
 
 
-def _shown(c: Literal | Comparison) -> str:
-    if isinstance(c, Literal):
-        return f"{'' if c.positive else 'not '}{c.predicate}({', '.join(c.args)})"
-    return f"{c.function}({', '.join(c.args)}) {c.op} {c.value}"
-
-
 def _check_literal(c: Literal, state: _State, checked: _Checked) -> None:
     """A boolean precondition holds if the state agrees or does not know (then it is assumed).
 
@@ -506,9 +500,9 @@ def _check_literal(c: Literal, state: _State, checked: _Checked) -> None:
     if key in state.facts:
         if state.facts[key] != c.positive:
             checked.executable = False
-            checked.broken.append(f"precondition {_shown(c)} is false after the steps before it")
+            checked.broken.append(f"precondition {show_precondition(c)} is false after the steps before it")
     elif (key, not c.positive) in checked.facts:
-        checked.broken.append(f"it requires {_shown(c)} and its negation")
+        checked.broken.append(f"it requires {show_precondition(c)} and its negation")
     else:
         checked.facts.append((key, c.positive))
 
@@ -520,7 +514,7 @@ def _check_comparison(c: Comparison, state: _State, later: list[Step], checked: 
     if key in state.values:
         checked.executable = compare(state.values[key], c.op, c.value)
         if not checked.executable:
-            checked.broken.append(f"precondition {_shown(c)} is false after the steps before it")
+            checked.broken.append(f"precondition {show_precondition(c)} is false after the steps before it")
     elif c.op == ">":
         if guard:
             checked.values.append((key, c.value - _net_change(key, later)))

@@ -36,6 +36,7 @@ from .domain import (
     Parameter,
     Precondition,
     Subtask,
+    show_precondition,
 )
 from .expressions import (
     Annotation,
@@ -89,6 +90,7 @@ __all__ = [
     "Select",
     "SemanticMapping",
     "Subtask",
+    "show_precondition",
     "VarDecl",
     "VarMapping",
     "WorldDbConfig",

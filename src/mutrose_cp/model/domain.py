@@ -56,6 +56,13 @@ Precondition = Literal | Comparison
 """One conjunct of an action's or method's precondition (HDDL ``:precondition``)."""
 
 
+def show_precondition(c: Precondition) -> str:
+    """A precondition as messages name it: ``not lit(RoomA)``, ``level(RoomA) = 1``."""
+    if isinstance(c, Literal):
+        return f"{'' if c.positive else 'not '}{c.predicate}({', '.join(c.args)})"
+    return f"{c.function}({', '.join(c.args)}) {c.op} {c.value}"
+
+
 @dataclass(frozen=True)
 class Declaration:
     """A predicate or function declaration ``(name ?a - t1 ?b - t2)``; the position is where

@@ -21,7 +21,7 @@ from typing import Any, Callable, Generic, Iterable, Sequence, TypeVar
 
 from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
-from ..model import Comparison, Configuration, Domain, GoalModel, InitialState, Literal
+from ..model import Comparison, Configuration, Domain, GoalModel, InitialState, Literal, show_precondition
 from ..model.task_graph import TaskGraph, TaskVertex
 from .boolean_model import (
     FALSE,
@@ -53,7 +53,6 @@ from .semantics import (
     initial_state,
     mission_queue,
     robot_precondition_writers,
-    show_precondition,
     unique_branch_valid,
 )
 from .replay import CHECKS, TASK_RULES, CopyReplay

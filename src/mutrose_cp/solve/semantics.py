@@ -29,7 +29,7 @@ from typing import Iterable, Iterator, Mapping, Sequence, TypeVar, overload
 from ..conditions import AllOf, Test, ValueTest, compare, holds, translate
 from ..constraints import EC, SEQ, Constraint
 from ..errors import MissionError
-from ..model import Binding, Comparison, Configuration, Domain, GoalModel, InitialState, Literal
+from ..model import Binding, Configuration, Domain, GoalModel, InitialState, Literal, show_precondition
 from ..model.task_graph import Decomposition, DecompositionVertex, EdgeKind, OperatorVertex, ScopeVertex, TaskGraph, TaskVertex
 from .numeric import StartCondition, StartConditions, scaled
 
@@ -275,12 +275,6 @@ def precondition_start_conditions(dec: Decomposition, state: State) -> list[tupl
         if condition is not None:
             out.append((atom, condition))
     return out
-
-
-def show_precondition(c: Literal | Comparison) -> str:
-    if isinstance(c, Literal):
-        return f"{'' if c.positive else 'not '}{c.predicate}({', '.join(c.args)})"
-    return f"{c.function}({', '.join(c.args)}) {c.op} {c.value}"
 
 
 def robot_parameters(domain: Domain, dec: Decomposition) -> list[tuple[str, str]]:
