@@ -215,7 +215,8 @@ def fmt_time(row: dict | None) -> str:
         return f"> {row.get('seconds', 0):.0f} s (limit)"
     if row["status"] != "ok":
         return row["status"]
-    return f"{row['seconds']:.2f} s / {row['peak_mb']:.0f} MB"
+    seconds = f"{row['seconds']:.3f}" if row["seconds"] < 0.1 else f"{row['seconds']:.2f}"  # start-up: to the ms
+    return f"{seconds} s / {row['peak_mb']:.0f} MB"
 
 
 def plots(rows: list[dict]) -> list[str]:
@@ -308,6 +309,17 @@ def targets(by: dict) -> list[str]:
     return lines
 
 
+def ratio_to_original(ours: dict | None, original: dict | None) -> float | None:
+    """Our time over the original's, both measured in the same run; None where either failed."""
+    if not ours or not original or ours["status"] != "ok" or original["status"] != "ok" or not original["seconds"]:
+        return None
+    return ours["seconds"] / original["seconds"]
+
+
+def fmt_ratio(ratio: float | None) -> str:
+    return "—" if ratio is None else f"{ratio:.1f}×"
+
+
 def small_missions(rows: list[dict]) -> list[str]:
     """The reference missions run whole, beside the floor (starting Python) and the original."""
     small = [r for r in rows if r["family"] == "small"]
@@ -316,17 +328,57 @@ def small_missions(rows: list[dict]) -> list[str]:
         return []
     out = ["## Small missions", "",
            "Every mission and configuration of the reference corpus, decomposed as a user runs it: one "
-           "`mutrose-cp decompose` process each, start-up included. The floor is starting Python "
-           f"(`python -c pass`): {floor['seconds']:.3f} s, {floor['peak_mb']:.0f} MB. The original tool took "
-           "0.06–0.09 s on these missions (measured on the machine of the earlier report; it is not installed "
-           "here).", "",
-           "| mission / configuration | exploratory | cpsat | cpsat / floor |", "|---|---|---|---|"]
+           "`mutrose-cp decompose` process each, start-up included, beside the original tool given the same "
+           "mission in the same run (where it is installed: `../shared/original`, or `MUTROSE_ORIGINAL`). The "
+           f"floor is starting Python (`python -c pass`): {floor['seconds']:.3f} s, {floor['peak_mb']:.0f} MB.", "",
+           "| mission / configuration | exploratory | cpsat | original | cpsat / original | cpsat / floor |",
+           "|---|---|---|---|---|---|"]
     by = {(r["mission"], r["algorithm"]): r for r in small}
     for mission in sorted({r["mission"] for r in small if r["algorithm"] != "floor"}):
-        e, c = by.get((mission, "exploratory")), by.get((mission, "cpsat"))
+        e, c, o = (by.get((mission, a)) for a in ("exploratory", "cpsat", "original"))
         ratio = f"{c['seconds'] / floor['seconds']:.0f}×" if c and c.get("seconds") and floor["seconds"] else "—"
-        out.append(f"| {mission} | {fmt_time(e)} | {fmt_time(c)} | {ratio} |")
+        out.append(f"| {mission} | {fmt_time(e)} | {fmt_time(c)} | {fmt_time(o)} | "
+                   f"{fmt_ratio(ratio_to_original(c, o))} | {ratio} |")
     return out + [""]
+
+
+def plugin_calls(rows: list[dict]) -> list[str]:
+    """The editor plug-in's call, ``mutrose HDDL GM CONFIG -p``, beside the original's."""
+    calls = [r for r in rows if r["family"] == "plugin"]
+    if not calls:
+        return []
+    out = ["## The editor plug-in's call", "",
+           "`mutrose HDDL GM CONFIG -p`, as mutrose-vscode runs it on every edit, inside a copy of each mission "
+           "folder whose `-p` output the corpus records (`reference/console`), beside the original given the same "
+           "command line in the same run.", "",
+           "| mission / configuration | mutrose -p | original -p | mutrose / original |", "|---|---|---|---|"]
+    by = {(r["mission"], r["algorithm"]): r for r in calls}
+    for mission in sorted({r["mission"] for r in calls}):
+        ours, theirs = by.get((mission, "mutrose -p")), by.get((mission, "original -p"))
+        out.append(f"| {mission} | {fmt_time(ours)} | {fmt_time(theirs)} | "
+                   f"{fmt_ratio(ratio_to_original(ours, theirs))} |")
+    return out + [""]
+
+
+def start_up_targets(by: dict) -> list[str]:
+    """Whole process on every reference mission within twice the original's time, side by side."""
+    lines = []
+    for family, ours_label, theirs_label, what in (("small", "cpsat", "original", "`mutrose-cp decompose`"),
+                                                  ("plugin", "mutrose -p", "original -p", "`mutrose -p`")):
+        rows = [r for r in by.values() if r["family"] == family]
+        pairs = {}
+        for r in rows:
+            pairs.setdefault(r.get("mission"), {})[r["algorithm"]] = r
+        ratios = [(ratio_to_original(p.get(ours_label), p.get(theirs_label)), mission) for mission, p in pairs.items()
+                  if theirs_label in p]
+        measured = [(x, m) for x, m in ratios if x is not None]
+        if not measured:
+            continue
+        worst, mission = max(measured)
+        met = "yes" if worst <= 2 and len(measured) == len(ratios) else "**no**"
+        lines.append(f"| every reference mission, whole process, {what} / the original (worst: {mission}) | ≤ 2× | "
+                     f"{worst:.1f}× | {met} |")
+    return lines
 
 
 def main(argv: list[str]) -> int:
@@ -370,9 +422,10 @@ def main(argv: list[str]) -> int:
            "pickup (4^10, 3.2 GB); for vital signs it stops at the time limit. `cpsat-all` (writing every "
            "decomposition) is run up to n = 10.", "", ORIGINAL, "", "## Targets", ""]
     out += targets(by)
+    out += start_up_targets(by)
     out += ["", "## Results", ""]
     for family in FAMILIES:
-        algos = [a for a in ("exploratory", "cpsat", "count", "cpsat-all", "cpsat-optimize")
+        algos = [a for a in ("exploratory", "cpsat", "count", "cpsat-all", "cpsat-optimize", "original")
                  if any(k[0] == family and k[2] == a for k in by)]
         sizes = sorted({k[1] for k in by if k[0] == family})
         if not sizes:
@@ -388,6 +441,7 @@ def main(argv: list[str]) -> int:
                        + " | ".join(fmt_time(by.get((family, n, a))) for a in algos) + f" | {ratio} |")
         out.append("")
     out += small_missions(rows)
+    out += plugin_calls(rows)
     diss = [r for r in rows if r["family"].startswith("dissertation")]
     if diss:
         out += ["## The dissertation's own worlds", "",

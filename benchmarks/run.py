@@ -15,6 +15,7 @@ import argparse
 import json
 import os
 import platform
+import shutil
 import statistics
 import subprocess
 import sys
@@ -26,9 +27,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from generate import REFERENCE, generate  # noqa: E402
 
 from mutrose_cp.measure import run_measured  # noqa: E402
+from mutrose_cp.mission import find_mission_files  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
+
+# the original C++ tool, a benchmark peer where it is installed (never shipped, found by path)
+ORIGINAL = Path(os.environ.get("MUTROSE_ORIGINAL", ROOT.parent / "shared" / "original" / "MutroseMissionDecomposer"))
+# the largest n worth giving the original per family: it lists every decomposition in memory
+ORIGINAL_MAX_N = {"delivery": 12, "pickup": 10, "vital-signs": None, "coupled": 12, "coupled-sequence": 12}
 
 FULL_LADDER = [2, 3, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000]
 QUICK_LADDER = [2, 10, 100]
@@ -78,14 +85,26 @@ DISSERTATION = {
 }
 
 
+TIME = Path("/usr/bin/time")
+
+
 def measure(cmd: list[str], cwd: Path, timeout: float) -> dict:
     """Run ``cmd`` as a child process (``mutrose_cp.measure``); wall time, peak RSS (MB), exit
-    status and the command's JSON summary."""
-    run = run_measured(cmd, cwd, timeout)
+    status and the command's JSON summary.
+
+    Linux records the forking parent's peak memory in the child's at ``exec``, so a 5 MB program
+    forked from this 30 MB process would read as 30 MB.  Where ``/usr/bin/time`` is installed, the
+    command is forked from that small process instead, and its reading (the command's peak, its
+    waited-for children included) replaces the parent's."""
+    with tempfile.NamedTemporaryFile(suffix=".rss") as rss:
+        wrapped = [str(TIME), "-q", "-f", "%M", "-o", rss.name, *cmd] if TIME.is_file() else cmd
+        run = run_measured(wrapped, cwd, timeout)
+        peak_kb = Path(rss.name).read_text().strip()
+    peak_mb = int(peak_kb) / 1024 if peak_kb.isdigit() else run.peak_mb
     if run.timed_out:
-        return {"status": "timeout", "seconds": round(run.seconds, 3), "peak_mb": round(run.peak_mb, 1)}
+        return {"status": "timeout", "seconds": round(run.seconds, 3), "peak_mb": round(peak_mb, 1)}
     result = {"status": "ok" if run.succeeded else f"exit {run.exit_status}",
-              "seconds": round(run.seconds, 3), "peak_mb": round(run.peak_mb, 1)}
+              "seconds": round(run.seconds, 3), "peak_mb": round(peak_mb, 1)}
     summary = run.summary
     if summary is not None:
         result.update(task_instances=summary.get("task_instances"), constraints=summary.get("constraints"),
@@ -125,11 +144,17 @@ def run_family(family: str, ladder: list[int], repeats: int, timeout: float, wor
     extra = EXTRA_SIZES.get(family, []) if extra_sizes else []
     for n in sorted(set(ladder) | {k for k in extra if k <= max(ladder)}):
         hddl, gm, cfg = generate(family, n, work / family)
-        for label, extra, max_n in RUNS[family]:
+        runs = list(RUNS[family])
+        if original_installed() and family in ORIGINAL_MAX_N:
+            cap = ORIGINAL_MAX_N[family]
+            runs.append(("original", ["original"], cap if extra_sizes else min(cap or 2, 2)))  # quick: its smallest
+        for label, extra, max_n in runs:
             if label in stopped or (max_n is not None and n > max_n):
                 continue
             out = work / f"{family}-{n}-{label}.out"
-            if extra[:1] == ["count"]:
+            if extra == ["original"]:  # writes the configuration's output file (in the work folder)
+                cmd = [str(ORIGINAL), str(hddl), str(gm), str(cfg)]
+            elif extra[:1] == ["count"]:
                 cmd = [sys.executable, "-m", "mutrose_cp", "count", str(hddl), str(gm), str(cfg), "-q", "--json-summary"]
             else:
                 cmd = [sys.executable, "-m", "mutrose_cp", "decompose", str(hddl), str(gm), str(cfg), "-q",
@@ -141,6 +166,7 @@ def run_family(family: str, ladder: list[int], repeats: int, timeout: float, wor
                 if r["status"] != "ok":
                     break
             out.unlink(missing_ok=True)
+            (work / family / f"{family}-{n}.out.json").unlink(missing_ok=True)
             row = summarize(family, n, label, samples)
             if "error" in row:
                 stopped.add(label)  # no run succeeded: the ladder stops for this algorithm
@@ -192,15 +218,68 @@ def run_small_missions(repeats: int, timeout: float, log) -> list[dict]:
     runs = [(mission, cfg) for mission in sorted((REFERENCE / "missions").iterdir())
             for cfg in sorted((mission / "configuration").glob("*"))]
     for n, (mission, cfg) in enumerate(runs, start=1):  # n numbers the runs (the family has no size)
-        for label, extra in (("exploratory", ["--algorithm", "exploratory"]), ("cpsat", [])):
+        labels = [("exploratory", ["--algorithm", "exploratory"]), ("cpsat", [])]
+        if original_installed():
+            labels.append(("original", []))
+        for label, extra in labels:
             with tempfile.TemporaryDirectory() as tmp:
-                cmd = [sys.executable, "-m", "mutrose_cp", "decompose", str(mission), "--config", cfg.name, "-q",
-                       "--json-summary", "-o", str(Path(tmp) / "out"), *extra]
-                samples = [measure(cmd, mission, timeout) for _ in range(repeats)]
+                if label == "original":  # inside a copy of the mission: it writes the configured output there
+                    work = Path(tmp) / mission.name
+                    shutil.copytree(mission, work)
+                    hddl, gm, _ = find_mission_files(mission, cfg.name)
+                    cmd = [str(ORIGINAL), str(hddl.relative_to(mission)), str(gm.relative_to(mission)),
+                           str(cfg.relative_to(mission))]
+                    samples = [measure(cmd, work, timeout) for _ in range(repeats)]
+                else:
+                    cmd = [sys.executable, "-m", "mutrose_cp", "decompose", str(mission), "--config", cfg.name,
+                           "-q", "--json-summary", "-o", str(Path(tmp) / "out"), *extra]
+                    samples = [measure(cmd, mission, timeout) for _ in range(repeats)]
             # exit 3 (nothing valid, as the original says too) is a finished run
             row = {**summarize("small", n, label, samples, accepted=("ok", "exit 3")), "mission": f"{mission.name}/{cfg.name}"}
             rows.append(row)
             log(f"small        {row['mission']:50} {label:12} {row['status']:8} {row.get('seconds', 0):6.2f} s "
+                f"{row.get('peak_mb', 0):7.1f} MB")
+    return rows
+
+
+def original_installed() -> bool:
+    return ORIGINAL.is_file() and os.access(ORIGINAL, os.X_OK)
+
+
+def plugin_calls() -> list[tuple[Path, Path]]:
+    """The missions whose ``-p`` output the corpus records (``reference/console``), with their
+    configuration: the editor plug-in's call, on every edit."""
+    calls = []
+    for stdout in sorted((REFERENCE / "console").glob("*/*.p.stdout")):
+        mission = REFERENCE / "missions" / stdout.parent.name
+        cfg = mission / "configuration" / (stdout.name.removesuffix(".p.stdout") + ".json")
+        if cfg.is_file():
+            calls.append((mission, cfg))
+    return calls
+
+
+def run_plugin_calls(repeats: int, timeout: float, log) -> list[dict]:
+    """``mutrose HDDL GM CONFIG -p`` (the drop-in) beside the original tool given the same
+    command line, each run inside a temporary copy of the mission folder as the plug-in runs it
+    (the original writes the configuration's output file there).  The original is measured only
+    where it is installed (``MUTROSE_ORIGINAL``)."""
+    dropin = [sys.executable, "-c", "import sys; from mutrose_cp.dropin import entry; sys.argv[0] = 'mutrose'; entry()"]
+    tools = [("mutrose -p", dropin)]
+    if original_installed():
+        tools.append(("original -p", [str(ORIGINAL)]))
+    rows = []
+    for n, (mission, cfg) in enumerate(plugin_calls(), start=1):
+        hddl, gm, _ = find_mission_files(mission, cfg.name)
+        for label, tool in tools:
+            with tempfile.TemporaryDirectory() as tmp:
+                work = Path(tmp) / mission.name
+                shutil.copytree(mission, work)
+                cmd = [*tool, str(hddl.relative_to(mission)), str(gm.relative_to(mission)),
+                       str(cfg.relative_to(mission)), "-p"]
+                samples = [measure(cmd, work, timeout) for _ in range(repeats)]
+            row = {**summarize("plugin", n, label, samples), "mission": f"{mission.name}/{cfg.name}"}
+            rows.append(row)
+            log(f"plugin       {row['mission']:50} {label:12} {row['status']:8} {row.get('seconds', 0):6.3f} s "
                 f"{row.get('peak_mb', 0):7.1f} MB")
     return rows
 
@@ -255,6 +334,8 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="mutrose-bench-") as tmp:
         if not args.no_small:
             rows += run_small_missions(repeats, timeout, lambda m: print(m, flush=True))
+            rows += run_plugin_calls(max(repeats, 5) if not args.quick else 1, timeout,
+                                     lambda m: print(m, flush=True))
         for family in args.families:
             rows += run_family(family, ladder, repeats, timeout, Path(tmp), lambda m: print(m, flush=True),
                                extra_sizes=not args.quick)
@@ -270,7 +351,8 @@ def main(argv: list[str] | None = None) -> int:
             rows.append({"family": "allocation", "n": 4, "algorithm": "allocate", "status": "failed"})
     path = RESULTS / f"{name}.json"
     path.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
-    failed = [r for r in rows if r["status"] not in ("ok", "timeout")]
+    # the original's own aborts (exit 134 on inputs it cannot take) are its results, not failures here
+    failed = [r for r in rows if r["status"] not in ("ok", "timeout") and not r["algorithm"].startswith("original")]
     print(f"wrote {path} ({len(rows)} measurements, {result['elapsed_s']} s); "
           f"{len(failed)} failed runs", flush=True)
     if not args.quick:  # the full run regenerates docs/benchmarks.md and its plots
