@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from typing import Any, Callable, Generic, Iterable, Sequence, TypeVar
+from typing import Any, Callable, Iterable, Sequence
 
 from ..conditions import AllOf, FactTest, Test, ValueTest, compare
 from ..constraints import Constraint
@@ -39,25 +39,16 @@ from .boolean_model import (
 from .numeric import SCALE, offset_gap, scaled
 from .semantics import (
     AtomKey,
-    ConstraintIndex,
-    NO_EFFECTS,
-    EffectScopes,
-    Effects,
-    ParallelConflicts,
     Seen,
     achieve_tests,
-    application_order,
     checks_parallel_conflicts,
     contradicts_itself,
-    effects_of,
-    initial_state,
-    mission_queue,
     robot_precondition_writers,
     unique_branch_valid,
 )
+from .encoding_state import V, Chain, EncodingState
 from .replay import CHECKS, TASK_RULES, CopyReplay
 
-V = TypeVar("V")  # the value a chain of writers carries
 
 
 @dataclass
@@ -97,53 +88,18 @@ def variable_name(tg: TaskGraph, parts: tuple[Any, ...]) -> str:
     return _NAMES[kind](tg, atom, v, extra)
 
 
-class Encoder:
+class Encoder(EncodingState):
     """Builds the :class:`Encoding` of a Task Graph with the exploratory algorithm's semantics."""
 
     def __init__(self, tg: TaskGraph, constraints: Sequence[Constraint], domain: Domain, gm: GoalModel,
                  config: Configuration, initial: InitialState, explain: bool = False, replay: bool = True) -> None:
-        self.tg = tg
+        super().__init__(tg, constraints, domain, gm, config, initial, explain,
+                         model=BoolModel(namer=functools.partial(variable_name, tg)))
         # stamped copies replay a leader's records (.replay); explaining labels every record by
         # its own vertices, so it encodes each copy in full
         self._replaying = replay and not explain
         self._replay: CopyReplay | None = None  # while encoding
         self.replayed: tuple[int, int] = (0, 0)  # copies that replayed their task rules, classes that led them
-        self.domain = domain
-        self.gm = gm
-        self.config = config
-        self.explain = explain
-        self.m = BoolModel(namer=functools.partial(variable_name, tg))
-        self.initial = initial_state(initial)
-        self.facts, self.values = self.initial.facts, self.initial.values
-        # the effects of the decompositions that have any (a large mission's most have none)
-        self.effects: dict[int, Effects] = {}
-        for dv in tg.decompositions():
-            effects = effects_of(dv.decomposition)
-            if effects is not NO_EFFECTS:
-                self.effects[dv.index] = effects
-        self.index = ConstraintIndex.of(constraints)
-        self.scopes = EffectScopes(tg)
-        self.queue = mission_queue(tg)
-        self.queue_pos = dict(zip(self.queue, range(len(self.queue))))
-        self.x: dict[int, Lit] = {}
-        self.active: dict[int, Lit] = {}
-        self.or_lits: dict[tuple[int, int], Lit] = {}
-        self.labels: dict[str, str] = {}
-        # the value of each atom after a prefix of its writers, as a tree of prefixes
-        self._bool_chains: dict[AtomKey, _Chain[tuple[Lit, Lit]]] = {}
-        self._num_chains: dict[AtomKey, _Chain[tuple[Lit, int | None]]] = {}
-        self._bool_prefixes: dict[AtomKey, list[_Chain[tuple[Lit, Lit]]]] = {}  # after the first k writers
-        self._writer_positions: dict[Any, list[int]] = {}
-        self._num_prefixes: dict[AtomKey, list[tuple[_Chain[tuple[Lit, int | None]], int]]] = {}
-        order = application_order(self.effects)
-        self.bool_writers: dict[AtomKey, list[tuple[int, bool]]] = {}
-        self.num_writers: dict[AtomKey, list[tuple[int, str, float]]] = {}
-        for d in order:  # writers of each atom, in the order their effects are applied (§7.3)
-            for key, val in self.effects[d].facts:
-                self.bool_writers.setdefault(key, []).append((d, val))
-            for key, kind, amount in self.effects[d].numeric:
-                self.num_writers.setdefault(key, []).append((d, kind, amount))
-        self.conflicts = ParallelConflicts(self.scopes, self.bool_writers)
         # the comparisons required of values the world does not give, by atom (.numeric)
         self.start_tests: dict[AtomKey, list[_StartTest]] = {}
 
@@ -268,11 +224,11 @@ class Encoder:
         literals: components of tasks coupled through a few facts decompose block by block
         (:mod:`.layered`).  The tasks of a long sequence see ever longer prefixes of the atom's
         writers: those are looked up by length, not walked again, which keeps the encoding linear."""
-        root = self._chain_root(atom, self._bool_chains, self._bool_start, False)
+        root = self._chain_root(atom, self.bool_chains, self._bool_start, False)
         everyone = self.bool_writers.get(atom, ())
         k = len(writers)
         if k and k <= len(everyone) and writers[-1] is everyone[k - 1]:  # a subsequence: this is a prefix
-            prefix = self._bool_prefixes.setdefault(atom, [root])
+            prefix = self.bool_prefixes.setdefault(atom, [root])
             while len(prefix) <= k:
                 prefix.append(self._bool_step(atom, prefix[-1], *everyone[len(prefix) - 1]))
             return prefix[k].value
@@ -281,7 +237,7 @@ class Encoder:
             node = self._bool_step(atom, node, w, pol)
         return node.value
 
-    def _bool_step(self, atom: AtomKey, node: "_Chain[tuple[Lit, Lit]]", w: int, pol: bool) -> "_Chain[tuple[Lit, Lit]]":
+    def _bool_step(self, atom: AtomKey, node: "Chain[tuple[Lit, Lit]]", w: int, pol: bool) -> "Chain[tuple[Lit, Lit]]":
         """The chain node after writer ``w`` (setting ``atom`` to ``pol`` if chosen) follows ``node``."""
         step = node.next.get((w, pol))
         if step is None:
@@ -290,20 +246,20 @@ class Encoder:
             name = (AFTER, atom, w, None)
             value = (self.m.or_of([xw, known_before], (KNOWN_AFTER, atom, w, None)),
                      self.m.or_of([xw, true_before], name) if pol else self.m.and_of([neg(xw), true_before], name))
-            step = node.next[(w, pol)] = _Chain(value)
+            step = node.next[(w, pol)] = Chain(value)
         return step
 
     def _bool_start(self, atom: AtomKey) -> tuple[Lit, Lit]:
         init = self.facts.get(atom)
         return (FALSE if init is None else TRUE), (TRUE if init else FALSE)
 
-    def _chain_root(self, atom: AtomKey, chains: dict[AtomKey, "_Chain[V]"], start: Callable[[AtomKey], V],
-                    numeric: bool) -> "_Chain[V]":
+    def _chain_root(self, atom: AtomKey, chains: dict[AtomKey, "Chain[V]"], start: Callable[[AtomKey], V],
+                    numeric: bool) -> "Chain[V]":
         if self._replay is not None:
             self._replay.chain_read(atom, numeric)
         root = chains.get(atom)
         if root is None:
-            root = chains[atom] = _Chain(start(atom))
+            root = chains[atom] = Chain(start(atom))
         return root
 
     def _bool_holds(self, atom: AtomKey, positive: bool, writers: Sequence[tuple[int, bool]], name: Name) -> Lit:
@@ -388,11 +344,11 @@ class Encoder:
         looked up by length for a prefix of all of them (as :meth:`_bool_value`); the variable is
         None before the first writer."""
         init = self.values.get(atom)
-        root = self._chain_root(atom, self._num_chains, lambda _: (TRUE if init is not None else FALSE, None), True)
+        root = self._chain_root(atom, self.num_chains, lambda _: (TRUE if init is not None else FALSE, None), True)
         everyone = self.num_writers.get(atom, [])
         k = len(writers)
         if k and k <= len(everyone) and writers[-1] is everyone[k - 1]:  # a subsequence: this is a prefix
-            prefix = self._num_prefixes.setdefault(atom, [(root, self._num_span(init))])
+            prefix = self.num_prefixes.setdefault(atom, [(root, self._num_span(init))])
             while len(prefix) <= k:
                 node, span = prefix[-1]
                 w, kind, amount = everyone[len(prefix) - 1]
@@ -409,8 +365,8 @@ class Encoder:
     def _num_span(init: float | None) -> int:
         return abs(scaled(init) if init is not None else 0) + 1
 
-    def _num_step(self, atom: AtomKey, node: "_Chain[tuple[Lit, int | None]]", w: int, kind: str, amount: float,
-                  span: int, init: float | None) -> "_Chain[tuple[Lit, int | None]]":
+    def _num_step(self, atom: AtomKey, node: "Chain[tuple[Lit, int | None]]", w: int, kind: str, amount: float,
+                  span: int, init: float | None) -> "Chain[tuple[Lit, int | None]]":
         """The chain node after writer ``w`` (changing ``atom`` by ``kind`` and ``amount`` if chosen)
         follows ``node``; ``span`` bounds the value's magnitude so far."""
         amount_scaled = scaled(amount)
@@ -424,7 +380,7 @@ class Encoder:
             # only an assignment makes a value known: an increase of an unknown value changes
             # its offset (the chain then holds the offset)
             known_after = self.m.or_of([known, xw], (KNOWN_AFTER, atom, w, None)) if kind == "assign" else known
-            step = node.next[(w, kind, amount_scaled)] = _Chain((known_after, nxt))
+            step = node.next[(w, kind, amount_scaled)] = Chain((known_after, nxt))
         return step
 
     def _state_test(self, test: Test, decs: Seen, name: Name, required: "_Requirement | None" = None) -> Lit:
@@ -452,9 +408,9 @@ class Encoder:
     def _writer_vertices(self, key: Any, everyone: Sequence[tuple[Any, ...]]) -> list[int]:
         """The decomposition vertices of an atom's writers, in order (listed once per atom; a
         function's atom keyed apart from a predicate's of the same name)."""
-        known = self._writer_positions.get(key)
+        known = self.writer_positions.get(key)
         if known is None:
-            known = self._writer_positions[key] = [w[0] for w in everyone]
+            known = self.writer_positions[key] = [w[0] for w in everyone]
         return known
 
     # --- rules -------------------------------------------------------------------------------------
@@ -557,14 +513,6 @@ class _StartTest:
 
 def _precondition_text(dec_id: str, c: Literal | Comparison) -> str:
     return f"{dec_id}: precondition {show_precondition(c)}"
-
-
-@dataclass
-class _Chain(Generic[V]):
-    """The value of an atom after a prefix of its writers, and the steps to longer prefixes."""
-
-    value: V  # (known, true) literals of a fact; (known literal, integer variable) of a number
-    next: dict[tuple[Any, ...], "_Chain[V]"] = field(default_factory=dict)
 
 
 def _atom_name(atom: AtomKey) -> str:

@@ -31,16 +31,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from itertools import islice
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from typing import Any, Callable, Sequence
 
 from ..conditions import AllOf, AnyOf, FactTest, Test
 from ..model import Literal
 from ..model.task_graph import OperatorVertex, ScopeVertex, TaskVertex
 from .boolean_model import FALSE, TRUE, AndOf, Clause, Const, Exactly, Lit, OrOf, Record
+from .encoding_state import Chain, EncodingState
 from .semantics import NO_EFFECTS, AtomKey, achieve_tests
-
-if TYPE_CHECKING:
-    from .encoding import Encoder
 
 CHOICES, TASK_RULES, CHECKS = 1, 2, 3  # the encoder's phases
 LEADERS = 16  # classes kept per source copy: the copies of a large world fall in a few
@@ -96,7 +94,7 @@ class _Leader:
 class CopyReplay:
     """The stamped copies of one Task Graph, and the compiled runs of their classes' leaders."""
 
-    def __init__(self, enc: "Encoder") -> None:
+    def __init__(self, enc: EncodingState) -> None:
         self.enc = enc
         tg = enc.tg
         self.copies: dict[int, _Copy] = {}  # root vertex -> copy
@@ -265,7 +263,7 @@ class CopyReplay:
         b = len(m.names)
         one = copy.ranges[CHOICES][0]
         two = copy.ranges[TASK_RULES][0] if phase == CHECKS else 0
-        run(m.names, m.records, enc._bool_chains, enc._bool_prefixes, self.owner, atoms, enc.tg.vertices,
+        run(m.names, m.records, enc.bool_chains, enc.bool_prefixes, self.owner, atoms, enc.tg.vertices,
             b, one, two, enc.active[copy.start], copy.start)
         copy.ranges[phase] = (b, len(m.names))
 
@@ -423,14 +421,9 @@ def _last(d: dict[Any, Any], before: int) -> list[tuple[Any, Any]]:
 
 def _compile(source: str) -> Callable[..., None]:
     namespace: dict[str, Any] = {"Clause": Clause, "OrOf": OrOf, "AndOf": AndOf, "Exactly": Exactly,
-                                 "TRUE": TRUE, "FALSE": FALSE, "Chain": _chain_class()}
+                                 "TRUE": TRUE, "FALSE": FALSE, "Chain": Chain}
     exec(compile(source, "<replayed run>", "exec"), namespace)  # noqa: S102 - source made here, from ints and reprs
     return namespace["replay"]  # type: ignore[no-any-return]
-
-
-def _chain_class() -> type:
-    from .encoding import _Chain
-    return _Chain
 
 
 class _Coder:
@@ -477,7 +470,7 @@ def _tuple(items: Sequence[str]) -> str:
     return "(" + ", ".join(items) + ("," if len(items) == 1 else "") + ")"
 
 
-def _choices_source(enc: "Encoder", copy: _Copy, active: Lit, b: int, counts: tuple[int, int, int, int]) -> str:
+def _choices_source(enc: EncodingState, copy: _Copy, active: Lit, b: int, counts: tuple[int, int, int, int]) -> str:
     """The source copy's choices (variables, the decomposition, activity and OR maps, records)
     as a function of another copy's first variable ``b``, root literal ``r`` and first vertex ``s``."""
     m = enc.m
@@ -541,7 +534,7 @@ def _rule(r: Record, code: _Coder) -> str:
     raise _Unsupported
 
 
-def _run_source(enc: "Encoder", copy: _Copy, phase: int, b: int, r0: int, atoms: list[AtomKey],
+def _run_source(enc: EncodingState, copy: _Copy, phase: int, b: int, r0: int, atoms: list[AtomKey],
                 touched: dict[AtomKey, bool]) -> str:
     """A leader's run of ``phase`` (variables from ``b``, records from ``r0``) as a function of
     another copy's bases and of its ``atoms`` (the leader's, in the same order, renamed)."""
@@ -572,9 +565,9 @@ def _run_source(enc: "Encoder", copy: _Copy, phase: int, b: int, r0: int, atoms:
                       *code.prelude(), *body])
 
 
-def _chain_lines(enc: "Encoder", atom: AtomKey, key: str, start: int, size: int, code: _Coder) -> list[str]:
+def _chain_lines(enc: EncodingState, atom: AtomKey, key: str, start: int, size: int, code: _Coder) -> list[str]:
     """Statements that rebuild the chain of values of ``atom`` (and its prefixes) for another copy."""
-    root = enc._bool_chains[atom]
+    root = enc.bool_chains[atom]
     lines = [f"    n0 = Chain(({code(root.value[0])}, {code(root.value[1])}))"]
     place = {id(root): 0}
     todo = [root]
@@ -588,7 +581,7 @@ def _chain_lines(enc: "Encoder", atom: AtomKey, key: str, start: int, size: int,
             lines.append(f"    n{place[id(node)]}.next[({code.vertex(w)}, {pol!r})] = n{n}")
             todo.append(child)
     lines.append(f"    chains[{key}] = n0")
-    prefixes = enc._bool_prefixes.get(atom)
+    prefixes = enc.bool_prefixes.get(atom)
     if prefixes:
         lines.append(f"    prefixes[{key}] = [{', '.join(f'n{place[id(p)]}' for p in prefixes)}]")
     else:
