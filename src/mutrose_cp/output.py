@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import IO, TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
+from typing import IO, TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
 from .boost_json import Tree, _write_list, boost_json, write_boost_json
 from .constraint_texts import constraint_texts
@@ -19,7 +19,7 @@ from .entry_templates import EntryTemplates, actions_tree, argument_values, pred
 from .errors import MissionError
 from .model import Configuration, Domain, InitialState, Literal, SemanticMapping
 from .output_file import atomic_writer
-from .model.task_graph import Decomposition, TaskGraph
+from .model.task_graph import Decomposition, SplitListing, TaskGraph
 
 if TYPE_CHECKING:
     from .htn import GroundPredicates
@@ -103,20 +103,6 @@ class PredicatePrinter:
 
 # ---------------------------------------------------------------------------------------------
 # The output document
-
-
-@dataclass
-class SplitListing:
-    """Mission decompositions that share a long common part (see
-    ``DecompositionSpace.split_listing``): each is ``prefix + part``.  The writer renders the
-    common part once, which makes listing the first 1000 of 3^5000 decompositions cheap."""
-
-    prefix: list[int]
-    parts: Iterable[list[int]]
-
-    def __iter__(self) -> Iterator[list[int]]:
-        for part in self.parts:
-            yield self.prefix + part
 
 
 @dataclass

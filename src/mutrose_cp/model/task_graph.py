@@ -524,3 +524,18 @@ class TaskGraphBuilder(_Adjacency):
         return TaskGraph(tuple(self.vertices), self._edges, unique_branch=unique_branch,
                          achieve_carried={v: tuple(c) for v, c in self.achieve_carried.items()},
                          stamped_copies=tuple(self.stamped_copies), warnings=tuple(self.warnings))
+
+
+@dataclass
+class SplitListing:
+    """Mission decompositions that share a long common part (see
+    ``DecompositionSpace.split_listing``): each is ``prefix + part`` (decomposition vertices).
+    The solver makes it and the writer renders the common part once, which makes listing the
+    first 1000 of 3^5000 decompositions cheap."""
+
+    prefix: list[int]
+    parts: Iterable[list[int]]
+
+    def __iter__(self) -> Iterator[list[int]]:
+        for part in self.parts:
+            yield self.prefix + part

@@ -13,7 +13,7 @@ from enum import StrEnum
 from typing import TYPE_CHECKING, Callable, Iterable
 
 from ..errors import NoDecompositionError
-from ..output import SplitListing
+from ..model.task_graph import SplitListing
 from .optimize import CostModel, least_cost
 
 if TYPE_CHECKING:
