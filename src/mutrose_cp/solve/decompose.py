@@ -13,11 +13,12 @@ from enum import StrEnum
 from typing import TYPE_CHECKING, Callable, Iterable
 
 from ..errors import NoDecompositionError
+from ..pipeline.stages import MissionStages
 from ..model.task_graph import SplitListing
+from . import decomposers
 from .optimize import CostModel, least_cost
 
 if TYPE_CHECKING:
-    from ..mission import Mission
     from .cpsat import DecompositionSpace
 
 DEFAULT_LIMIT = 1000
@@ -85,18 +86,18 @@ class DecompositionResult:
         return section
 
 
-def decompose(mission: Mission, request: DecompositionRequest,
+def decompose(mission: MissionStages, request: DecompositionRequest,
               progress: Callable[[int, int], None] | None = None) -> DecompositionResult:
     """Answer ``request`` for ``mission``.  Raises :class:`NoDecompositionError` (with the
     reasons CP-SAT finds) when the mission has tasks but no valid decomposition."""
     if not mission.task_graph.tasks():
         return DecompositionResult(request.algorithm, [], 0)  # no entity of the world matched the queries
     if request.algorithm == Algorithm.EXPLORATORY:
-        found = mission.exploratory(progress)
+        found = decomposers.exploratory(mission, progress)
         if not found:
             raise NoDecompositionError("no valid mission decomposition")
         return DecompositionResult(request.algorithm, found, len(found))
-    space = mission.decomposition_space(progress, list_limit=OPTIMIZE_LIST_LIMIT if request.optimize else None)
+    space = decomposers.decomposition_space(mission, progress, list_limit=OPTIMIZE_LIST_LIMIT if request.optimize else None)
     if space.count == 0:
         raise _nothing_valid(mission, request.explain)
     if request.optimize:
@@ -122,12 +123,12 @@ def _listing(space: DecompositionSpace, limit: int | None) -> DecompositionResul
     return DecompositionResult(Algorithm.CPSAT, decompositions, total, space, listed=listed if listed < total else None)
 
 
-def _nothing_valid(mission: Mission, every_reason: bool) -> NoDecompositionError:
+def _nothing_valid(mission: MissionStages, every_reason: bool) -> NoDecompositionError:
     """The error for a mission without valid decomposition: a conflicting set of labelled
     constraints (CP-SAT assumptions) names what is responsible."""
     from .cpsat import explain
 
-    reasons = explain(mission.encoding(explain=True))
+    reasons = explain(decomposers.encoding(mission, explain=True))
     shown = reasons if every_reason else reasons[:SHOWN_REASONS]
     detail = "; ".join(shown) or "the goal model's structure admits no combination"
     more = ("" if every_reason or len(reasons) <= SHOWN_REASONS

@@ -12,7 +12,7 @@ by :mod:`mutrose_cp.api`; see ``docs/api.md``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 from ortools.sat.python import cp_model
 
@@ -20,6 +20,8 @@ from ..constraints import Constraint, ConstraintKind
 from ..expansion import TaskInstance
 from ..model import RobotNumber
 from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex
+from ..pipeline.stages import MissionStages
+from . import decomposers
 from .boolean_model import FALSE, TRUE, Lit
 from .encoding import Encoding
 from .native import cmh
@@ -28,10 +30,6 @@ from .proto import ProtoBuilder, negated
 #: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation
 #: (``IntVar`` and ``NotBooleanVariable`` share this base class).
 CpLiteral = cmh.Literal
-
-if TYPE_CHECKING:
-    from ..mission import Mission
-
 
 class ConstraintInfo(NamedTuple):
     """One mission constraint between two decompositions (ids like ``"AT1_1|1"``).
@@ -109,18 +107,18 @@ class DecompositionModel:
     decompositions_info: dict[str, DecompositionInfo]
     true: CpLiteral  # the shared constant 1 (``false`` is the constant 0)
     false: CpLiteral
-    mission: Mission = field(repr=False)
+    mission: MissionStages = field(repr=False)
     #: the solver-neutral boolean model the CP-SAT model was built from (for relaxations)
     encoding: Encoding = field(repr=False)
     builder: ProtoBuilder = field(repr=False)
 
     # ------------------------------------------------------------------------------------------
     @classmethod
-    def build(cls, mission: Mission, model: cp_model.CpModel | None = None) -> "DecompositionModel":
+    def build(cls, mission: MissionStages, model: cp_model.CpModel | None = None) -> "DecompositionModel":
         """Encode ``mission`` and post the whole decomposition space to ``model`` (a new
         ``CpModel`` unless one is given, e.g. to combine it with existing variables)."""
         tg = mission.task_graph
-        enc = mission.encoding()
+        enc = decomposers.encoding(mission)
         model = model if model is not None else cp_model.CpModel()
         builder = ProtoBuilder(enc.model, model.proto)
         for r in enc.model.records:
@@ -182,7 +180,7 @@ def _constraint_info(tg: TaskGraph, c: Constraint) -> ConstraintInfo:
                           c.group, c.divisible)
 
 
-def _forall_depth(mission: Mission, goal_key: str) -> int:
+def _forall_depth(mission: MissionStages, goal_key: str) -> int:
     """How many forAll goals are above ``goal_key`` in the goal model (itself included)."""
     gm = mission.goal_model
     depth = 0
@@ -200,7 +198,7 @@ def _forall_depth(mission: Mission, goal_key: str) -> int:
     return depth
 
 
-def _or_keys(mission: Mission, tg: TaskGraph, enc: Encoding) -> dict[tuple[int, int], tuple[str, str]]:
+def _or_keys(mission: MissionStages, tg: TaskGraph, enc: Encoding) -> dict[tuple[int, int], tuple[str, str]]:
     """(OR vertex, child vertex) -> (OR goal name with forAll suffix, child label)."""
     out: dict[tuple[int, int], tuple[str, str]] = {}
     used: set[tuple[str, str]] = set()
