@@ -243,10 +243,10 @@ def test_the_constraints_section_is_each_constraint_formatted_in_order(monkeypat
     assert texts.SEPARATOR.join(texts.constraint_texts(expected, key)) == texts.SEPARATOR.join(one_by_one(expected))
     assert '"group": "False",\n            "divisible": "True"' in made[1]
     fh = io.StringIO()
-    boost_json._write_list(fh, texts.constraint_texts(stored, key), 4)
+    boost_json.write_list(fh, texts.constraint_texts(stored, key), 4)
     assert fh.getvalue() == "[\n        " + ",\n        ".join(one_by_one(expected)) + "\n    ]"
     fh = io.StringIO()
-    boost_json._write_list(fh, texts.constraint_texts([], key), 4)
+    boost_json.write_list(fh, texts.constraint_texts([], key), 4)
     assert fh.getvalue() == '""'
 
 

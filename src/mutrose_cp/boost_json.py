@@ -20,7 +20,7 @@ _ESCAPES = {'"': '\\"', "\\": "\\\\", "/": "\\/", "\b": "\\b", "\f": "\\f", "\n"
 
 
 @functools.lru_cache(maxsize=1 << 16)
-def _escape(s: str) -> str:
+def escape_json(s: str) -> str:
     """Boost's JSON string escaping: named escapes, then every other byte outside printable
     ASCII as ``\\u00XX`` (per UTF-8 byte, as Boost does).  Memoized: names, types and flags
     repeat across thousands of task entries."""
@@ -46,7 +46,7 @@ def _boost_parts(tree: Tree, indent: int, out: list[str], flush: Callable[[list[
     to it after a container member: all but its last piece, the separator that the end of the
     container still rewrites, can go."""
     if isinstance(tree, str):
-        out.append(_escape(tree))
+        out.append(escape_json(tree))
         return
     if not tree:
         out.append('""')
@@ -56,9 +56,9 @@ def _boost_parts(tree: Tree, indent: int, out: list[str], flush: Callable[[list[
         out.append("{\n")
         for k, v in tree.items():
             if isinstance(v, str):
-                out.append(f"{pad}{_escape(k)}: {_escape(v)},\n")
+                out.append(f"{pad}{escape_json(k)}: {escape_json(v)},\n")
             else:
-                out.append(f"{pad}{_escape(k)}: ")
+                out.append(f"{pad}{escape_json(k)}: ")
                 _boost_parts(v, indent + 4, out, flush)
                 out.append(",\n")
                 if flush is not None and len(out) > _FLUSH_PARTS:
@@ -67,7 +67,7 @@ def _boost_parts(tree: Tree, indent: int, out: list[str], flush: Callable[[list[
         out.append("[\n")
         for v in tree:
             if isinstance(v, str):
-                out.append(f"{pad}{_escape(v)},\n")
+                out.append(f"{pad}{escape_json(v)},\n")
             else:
                 out.append(pad)
                 _boost_parts(v, indent + 4, out, flush)
@@ -99,7 +99,7 @@ def write_boost_json(tree: Tree, fh: IO[str], indent: int = 0) -> None:
     fh.write("".join(out))
 
 
-def _write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
+def write_list(fh: IO[str], items: Iterable[str], indent: int) -> None:
     """A JSON list whose elements are already serialized at ``indent + 4``; an item holds one
     or more of them, joined by ``,\n`` and the indentation (the constraints come a run at a
     time).  Streamed an item at a time: the file object gathers the writes (joining them here

@@ -23,8 +23,8 @@ from __future__ import annotations
 from bisect import bisect_left
 from typing import Mapping, Sequence
 
-from .boost_json import _escape
-from .entry_templates import EntryTemplates, _slot_text, _Template
+from .boost_json import escape_json
+from .entry_templates import EntryTemplates, slot_text, Template
 from .expansion import TaskInstance, Value
 from .model.task_graph import DecompositionVertex, StampedCopy, TaskGraph
 
@@ -35,7 +35,7 @@ class _Block:
     """A source copy's entries as the text between its fields, with a free place for every
     field, and what each slot holds."""
 
-    def __init__(self, template: _Template, slots: list[Slot], constants: frozenset[str]) -> None:
+    def __init__(self, template: Template, slots: list[Slot], constants: frozenset[str]) -> None:
         self.pieces = [piece for part in template.parts for piece in (part, "")][:-1]  # fields at odd places
         self.fields = template.slots  # the slot each field shows
         self.slots = slots
@@ -83,9 +83,9 @@ class CopyBlocks:
         if values is None or not block.values <= values.keys():
             return None
         decs, key = self.decs, self.key
-        escaped = {source: _escape(value)[1:-1] for source, value in values.items()}  # once per value
+        escaped = {source: escape_json(value)[1:-1] for source, value in values.items()}  # once per value
         names = [key[decs[first + place].index] if kind == "key"  # "t<k>": nothing to escape
-                 else _escape(decs[first + place].decomposition.id)[1:-1] if kind == "id"
+                 else escape_json(decs[first + place].decomposition.id)[1:-1] if kind == "id"
                  else escaped[source_value]
                  for kind, place, source_value in block.slots]
         return block.fill(names), end
@@ -109,9 +109,9 @@ class CopyBlocks:
             if entry is None:
                 self._blocks[lo] = None
                 return None
-            texts.append(f'        "{_slot_text(slot("key", self.key[d.index]))}": {entry}')
+            texts.append(f'        "{slot_text(slot("key", self.key[d.index]))}": {entry}')
         constants = frozenset().union(*(d.decomposition.path.constants for d in self.decs[lo:hi]))
-        block = self._blocks[lo] = _Block(_Template(",\n".join(texts)), slots, constants)
+        block = self._blocks[lo] = _Block(Template(",\n".join(texts)), slots, constants)
         return block
 
     def _values(self, lo: int, hi: int, source_lo: int, shift: int, constants: frozenset[str]) -> dict[str, str] | None:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING, Callable, Hashable, Mapping
 
-from .boost_json import _escape, boost_json
+from .boost_json import escape_json, boost_json
 from .errors import MissionError
 from .htn import ground_path
 
@@ -72,7 +72,7 @@ def predicate_members(printed: tuple[list[PrintedPredicate], list[PrintedPredica
             + _member("effects", boost_json([pred_tree(e) for e in eff], 12)))
 
 
-class _Template:
+class Template:
     """Formatted text with slots: ``parts[0] + v[slots[0]] + parts[1] + ...``."""
 
     def __init__(self, text: str) -> None:
@@ -100,7 +100,7 @@ class EntryTemplates:
         self._same_steps: dict[tuple[Step, ...], int] = {}  # a path expanded per instance (recursion)
         self._small: dict[Hashable, str] = {}
         self._sort_of: dict[str, tuple[str, ...]] = {}
-        self._predicates: dict[Hashable, _Template | None] = {}
+        self._predicates: dict[Hashable, Template | None] = {}
 
     # -- parts that depend on the task or the path only ----------------------------------------
     def _head(self, name: str) -> str:
@@ -108,7 +108,7 @@ class EntryTemplates:
         head = self._heads.get(name)
         if head is None:
             task = self.domain.task_by_name[name]
-            head = self._heads[name] = (_member("name", _escape(name)) + ",\n" + _member(
+            head = self._heads[name] = (_member("name", escape_json(name)) + ",\n" + _member(
                 "arguments", boost_json({p.name: p.type for p in task.parameters}, 12)))
         return head
 
@@ -172,7 +172,7 @@ class EntryTemplates:
 
     def _predicates_text(self, dec: Decomposition, constants: frozenset[str], path_key: int) -> str:
         key, values, symbolic = self._predicate_slots(dec, constants, path_key)
-        escaped = [_escape(v)[1:-1] for v in values]
+        escaped = [escape_json(v)[1:-1] for v in values]
         if key in self._predicates:
             template = self._predicates[key]
             return template.fill(escaped) if template is not None else predicate_members(self.printer.printed(dec))
@@ -181,14 +181,14 @@ class EntryTemplates:
         return direct
 
     def _template(self, dec: Decomposition, symbolic: dict[str, Value], values: list[str], escaped: list[str],
-                  direct: str) -> _Template | None:
+                  direct: str) -> Template | None:
         """The template of ``dec``'s key, if it gives ``direct`` back for ``dec`` itself."""
         real = {f"{_SLOT_MARK}{k}{_SLOT_MARK}": v for k, v in enumerate(values)}
         try:
             printed = self.printer.printed(dec, ground_path(dec.path, symbolic), real)
         except MissionError:  # a placeholder in an error: the direct path reports it
             return None
-        template = _Template(predicate_members(printed))
+        template = Template(predicate_members(printed))
         return template if template.fill(escaped) == direct else None
 
     # -- an entry -----------------------------------------------------------------------------
@@ -198,7 +198,7 @@ class EntryTemplates:
         values = argument_values(self.domain.task_by_name[inst.name], inst)
         loc = inst.location
         decomposition, constants, path_key = self._path(dec.path)
-        return self._members(dec, group, divisible, _escape(dec.id), boost_json(values, 12),
+        return self._members(dec, group, divisible, escape_json(dec.id), boost_json(values, 12),
                              boost_json(list(loc) if isinstance(loc, tuple) else (loc or ""), 12),
                              self._predicates_text(dec, constants, path_key), decomposition)
 
@@ -228,8 +228,8 @@ class EntryTemplates:
                                             else mark(value))
         loc = inst.location
         locations = [mark(v) for v in loc] if isinstance(loc, tuple) else mark(loc or "")
-        predicates = template.fill([_slot_text(slot("value", v)) for v in values])
-        return self._members(dec, group, divisible, f'"{_slot_text(slot("id", dec.id))}"', boost_json(arguments, 12),
+        predicates = template.fill([slot_text(slot("value", v)) for v in values])
+        return self._members(dec, group, divisible, f'"{slot_text(slot("id", dec.id))}"', boost_json(arguments, 12),
                              boost_json(locations, 12), predicates, decomposition)
 
     def _members(self, dec: Decomposition, group: bool, divisible: bool, id_text: str, values: str, locations: str,
@@ -251,6 +251,6 @@ class EntryTemplates:
         return "{\n" + ",\n".join(members) + "\n        }"
 
 
-def _slot_text(k: int) -> str:
+def slot_text(k: int) -> str:
     """Slot ``k`` as it stands in formatted (escaped) text."""
     return f"\\u001F{k}\\u001F"

@@ -11,7 +11,7 @@ import os
 from dataclasses import dataclass
 from typing import IO, TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
-from .boost_json import Tree, _write_list, boost_json, write_boost_json
+from .boost_json import Tree, write_list, boost_json, write_boost_json
 from .constraint_texts import constraint_texts
 from .constraints import EC, SEQ, Constraint
 from .copy_blocks import CopyBlocks
@@ -183,7 +183,7 @@ class OutputBuilder:
         else:
             fh.write('""')
         fh.write(",\n    \"constraints\": ")
-        _write_list(fh, constraint_texts(self.m.constraints, self.key.__getitem__), 4)
+        write_list(fh, constraint_texts(self.m.constraints, self.key.__getitem__), 4)
 
     def write_json_tail(self, fh: IO[str]) -> None:
         """The rest of the document: the mission decompositions and the decomposition space."""
