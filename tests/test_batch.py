@@ -27,6 +27,11 @@ from generate import generate  # noqa: E402
 EXAMPLES = ROOT / "examples"
 
 
+def slow_mission(folder: Path) -> Path:
+    """A mission whose ``count`` takes CP-SAT many seconds: a job to stop midway."""
+    return _coupled_mission(folder)
+
+
 def batch(*args: str, cwd: Path, env: dict | None = None) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "mutrose_cp", "batch", *map(str, args)], cwd=cwd,
                           capture_output=True, text=True, timeout=300, env=env)
@@ -64,10 +69,10 @@ def test_every_command_runs_as_a_job_and_each_line_is_a_result(tmp_path):
     assert by_id["c"]["summary"]["mission_decompositions"] == "36"
     assert by_id["k"]["summary"]["valid"] is True
     assert by_id["v"]["status"] == "ok" and by_id["v"]["summary"]["checked"] == 1
-    assert by_id["bad"]["status"] == "failed" and by_id["bad"]["exit_code"] == 2
+    assert by_id["bad"]["status"] == "invalid-input" and by_id["bad"]["exit_code"] == 2
     assert "is not a directory" in by_id["bad"]["problems"][0]
     assert all(line["peak_mb"] > 0 and line["seconds"] > 0 for line in lines)
-    assert "failed" in run.stderr and "bad: count no-such-mission" in run.stderr  # the summary table
+    assert "invalid-input" in run.stderr and "bad: count no-such-mission" in run.stderr  # the summary table
 
 
 def test_a_csv_manifest_runs_its_rows(tmp_path):

@@ -14,7 +14,7 @@ children from several threads, where ``preexec_fn`` may deadlock.
 
 A job that runs out of memory gets a ``MemoryError`` in Python (reported with exit status
 :data:`MEMORY_EXIT`) or a failed allocation in native code (which aborts the process); the parent
-classifies both (:func:`mutrose_cp.batch.job.classify`).
+classifies both (:func:`mutrose_cp.batch.statuses.classify`).
 
 At its end the child writes its own peak resident memory (``VmHWM``, in kB) to the file
 descriptor ``PEAK_FD``.  The parent's ``os.wait4`` cannot tell it: a child's peak counts the
@@ -76,7 +76,8 @@ def main(argv: list[str]) -> None:
         entry()
     except MemoryError:
         # print without allocating much: the heap is full
-        os.write(2, f"error: out of memory: the job needs more than --memory-mb {megabytes}\n".encode())
+        limit = f"more than --memory-mb {megabytes}" if megabytes else "more than the memory limit it inherited"
+        os.write(2, f"error: out of memory: the job needs {limit}\n".encode())
         report_peak(peak_fd)
         os._exit(MEMORY_EXIT)
 

@@ -14,14 +14,18 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
-from ..option_types import count_option, seconds
+from ..option_types import count_option, input_file, output_file, seconds
 
 if TYPE_CHECKING:  # the command line builds this parser for every command: the rest loads when batch runs
+    from ..interrupt import Interrupted
+    from .engines import Engine
     from .job import Outcome
     from .manifest import Job
-    from .results import InputHasher
+    from .plan import Plan
+    from .results import ResultLine
+    from .safety import BatchFiles
 
 BATCH_USAGE = ("mutrose-cp batch [options] MANIFEST\n"
                "       mutrose-cp batch [options] --each GLOB [--mission DIR] [--output PATTERN] COMMAND [OPTION ...]")
@@ -46,12 +50,12 @@ def _batch_options(p: argparse.ArgumentParser) -> None:
                    help="stop a job after S seconds (status timeout; default: no limit)")
     p.add_argument("--memory-mb", type=count_option(1), metavar="MB",
                    help="stop a job that needs more than MB megabytes (status memory; default: no limit)")
-    p.add_argument("--results", metavar="FILE",
+    p.add_argument("--results", metavar="FILE", type=output_file,
                    help="the results file (JSONL; default: MANIFEST with the suffix .results.jsonl, or "
                         "batch.results.jsonl with --each)")
     p.add_argument("--each", metavar="GLOB", help="one job per mission folder GLOB matches (or per world file, "
                                                   "with --mission)")
-    p.add_argument("--mission", metavar="DIR", help="--each: run this mission on every world file GLOB matches")
+    p.add_argument("--mission", metavar="DIR", type=input_file, help="--each: run this mission on every world file GLOB matches")
     p.add_argument("--output", metavar="PATTERN", help="--each: each job's output file; {name} is the matched "
                                                        "folder's or world's name")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary on stderr")
@@ -67,6 +71,17 @@ def add_batch_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]")
     p.set_defaults(func=cmd_batch, max_input_mb=256)
 
 
+class TailParser(argparse.ArgumentParser):
+    """The batch options written after the manifest.  Its usage errors are raised as errors of
+    the batch (exit 2, as the main parser's), not as an exit: the main parser's own error
+    handling is over by the time it runs, and a program that calls ``main`` gets a status back."""
+
+    def error(self, message: str) -> NoReturn:
+        from ..errors import MissionError
+
+        raise MissionError(message, "batch")
+
+
 def _complete(args: argparse.Namespace) -> None:
     """Finish parsing: options written after the manifest (``batch ladder.json --jobs 2``), and a
     manifest taken for the address of ``--ray`` (``batch --ray ladder.json``)."""
@@ -75,7 +90,7 @@ def _complete(args: argparse.Namespace) -> None:
     if args.ray and not args.target and ":" not in args.ray and args.ray != "auto":
         args.target, args.ray = [args.ray], ""
     if args.each is None and len(args.target) > 1:
-        tail = argparse.ArgumentParser(prog="mutrose-cp batch", usage=BATCH_USAGE)
+        tail = TailParser(prog="mutrose-cp batch", usage=BATCH_USAGE)
         _batch_options(tail)
         tail.parse_args(args.target[1:], namespace=args)
         args.target = args.target[:1]
@@ -86,30 +101,37 @@ def _complete(args: argparse.Namespace) -> None:
 
 
 def cmd_batch(args: argparse.Namespace) -> int:
-    from ..errors import MissionError
-    from ..interrupt import Interrupted, phase, signals_held
     from .engines import LocalPool, RayCluster
-    from .job import OK, JobSpec
-    from .manifest import check_jobs
-    from .report import Progress, summary_table
-    from .results import InputHasher, ResultLine, ResultsFile
+    from .plan import make_plan
 
     _complete(args)
-    jobs, base, results_path = _jobs(args)
+    jobs, base, results_path, manifest = _jobs(args)
     engine = RayCluster(args.ray or None, args.jobs) if args.ray is not None else LocalPool(args.jobs)
-    parsed = check_jobs(jobs, base)
-    hashes = _hashes(jobs, parsed, InputHasher(base))
-    specs = [JobSpec(job.command_line(), str(base), args.time_limit, args.memory_mb or 0) for job in jobs]
-    results = ResultsFile(results_path)
-    for note in results.ignored:
-        print(f"warning: {note}", file=sys.stderr)
-    lines: list[ResultLine | None] = [results.done(h, s) for h, s in zip(hashes, specs)]
-    todo = [(i, spec) for i, (spec, line) in enumerate(zip(specs, lines)) if line is None]
-    progress = Progress(len(jobs), len(jobs) - len(todo), not args.quiet)
+    # every check before any job runs, and before the results file is touched
+    plan = make_plan(jobs, _batch_files(args, manifest, results_path, base), args.time_limit, args.memory_mb or 0)
+    return _run(args, engine, plan)
+
+
+def _run(args: argparse.Namespace, engine: Engine, plan: Plan) -> int:
+    """Open the results file, run the jobs it does not settle, record each as it finishes, and
+    report; the exit status."""
+    from ..interrupt import Interrupted, phase, signals_held
+    from .journal import ResultsFile
+    from .report import Progress, summary_table
+    from .results import ResultLine
+
+    results = ResultsFile(plan.batch.results, plan.batch.results_where)
+    results.open()  # an unwritable results file stops the batch here, before the first job
+    shown = _warn(results.notes, 0)
+    lines: list[ResultLine | None] = [results.done(h, s) for h, s in zip(plan.hashes, plan.specs)]
+    todo = plan.to_run(lines)
+    for i in todo:
+        lines[i] = None
+    progress = Progress(len(lines), len(lines) - len(todo), not args.quiet)
     progress.draw()
 
     def report(i: int, outcome: Outcome) -> None:
-        line = ResultLine.of(jobs[i], hashes[i], specs[i], outcome)
+        line = ResultLine.of(plan.jobs[i], plan.recorded_hash(i), plan.specs[i], outcome)
         with signals_held():  # a finished job is recorded whole, or (interrupted before) not at all
             results.record(line)
             lines[i] = line
@@ -120,53 +142,59 @@ def cmd_batch(args: argparse.Namespace) -> int:
     try:
         with phase("running the jobs"):
             if todo:
-                engine.run(todo, report)
+                engine.run([(i, plan.specs[i]) for i in todo], report)
     except Interrupted as err:
         stopped = err
     finally:
         progress.close()
-        results.close(hashes)
+        results.close(plan.hashes)
+        _warn(results.notes, shown)
     if not args.quiet:
-        print(summary_table(jobs, lines, len(jobs) - len(todo), engine.describe(), time.perf_counter() - start),
+        print(summary_table(plan.jobs, lines, len(lines) - len(todo), engine.describe(), time.perf_counter() - start),
               file=sys.stderr)
-        print(f"results: {results_path}", file=sys.stderr)
+        print(f"results: {plan.batch.named}", file=sys.stderr)
+    return _ending(plan, lines, stopped)
+
+
+def _ending(plan: Plan, lines: list[ResultLine | None], stopped: Interrupted | None) -> int:
+    """The exit status, and what an interrupted batch left to do."""
+    from ..errors import MissionError
+    from .statuses import OK
+
     if stopped is not None:
         left = sum(line is None for line in lines)
         print(f"interrupted ({stopped}): {left} jobs not finished, none of them recorded; run the same command "
               "again to run only those", file=sys.stderr)
         return stopped.exit_code
     if any(line is None for line in lines):
-        raise MissionError("some jobs have no result", str(results_path))
+        raise MissionError("some jobs have no result", str(plan.batch.results))
     return 0 if all(line is not None and line.status == OK for line in lines) else 1
 
 
-def _jobs(args: argparse.Namespace) -> tuple[list[Job], Path, Path]:
-    """The jobs, the folder they run in, and the results file: from the manifest (its folder, and
-    ``MANIFEST.results.jsonl`` beside it), or from ``--each`` (the current folder)."""
+def _warn(notes: list[str], shown: int) -> int:
+    """Print the notes from ``shown`` on as warnings; how many are printed now."""
+    for note in notes[shown:]:
+        print(f"warning: {note}", file=sys.stderr)
+    return len(notes)
+
+
+def _batch_files(args: argparse.Namespace, manifest: Path | None, results: Path, base: Path) -> BatchFiles:
+    """The batch's own files, the results file named as the user named it (for messages)."""
+    from .safety import BatchFiles
+
+    return BatchFiles(None if manifest is None else manifest.absolute(), results.absolute(), str(results),
+                      bool(args.results), base)
+
+
+def _jobs(args: argparse.Namespace) -> tuple[list[Job], Path, Path, Path | None]:
+    """The jobs, the folder they run in, the results file and the manifest: from the manifest
+    (its folder, and ``MANIFEST.results.jsonl`` beside it), or from ``--each`` (the current
+    folder, no manifest)."""
     from .manifest import jobs_from_glob, read_manifest
 
     if args.each is not None:
         jobs = jobs_from_glob(args.each, args.target[0], args.target[1:], mission=args.mission, output=args.output)
-        return jobs, Path.cwd(), Path(args.results or "batch.results.jsonl")
+        return jobs, Path.cwd(), Path(args.results or "batch.results.jsonl"), None
     manifest = Path(args.target[0])
     results = Path(args.results) if args.results else manifest.with_suffix(".results.jsonl")
-    return read_manifest(manifest), manifest.resolve().parent, results
-
-
-def _hashes(jobs: list[Job], parsed: list[argparse.Namespace], hasher: InputHasher) -> list[str]:
-    """The input hash of every job; two jobs with the same hash are one job listed twice."""
-    from ..errors import MissionError, Problem
-
-    hashes: list[str] = []
-    first: dict[str, Job] = {}
-    problems: list[Problem] = []
-    for job, args in zip(jobs, parsed):
-        h = hasher.job_hash(job, args)
-        if h in first:
-            problems.append(Problem(job.where, f"job {job.id} repeats job {first[h].id} (same command, options, "
-                                               "output and inputs)"))
-        first.setdefault(h, job)
-        hashes.append(h)
-    if problems:
-        raise MissionError(problems)
-    return hashes
+    return read_manifest(manifest), manifest.resolve().parent, results, manifest

@@ -24,7 +24,7 @@ import socket
 import threading
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from contextlib import contextmanager
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any, Callable, Iterator, Protocol, Sequence
 
 from ..errors import MissionError
 from ..interrupt import Interrupted, current_phase
@@ -34,6 +34,15 @@ Report = Callable[[int, Outcome], None]
 RAY_INSTALL = "pip install 'mutrose-cp[ray]'"
 CONNECT_SECONDS = 5.0  # how long a cluster's address may take to answer
 WAIT_SECONDS = 0.2  # how long the Ray driver waits for a finished job before it looks for an interrupt
+JOIN_POLL_SECONDS = 0.05  # how often the main thread looks for an interrupt while Ray joins a cluster
+
+
+class Engine(Protocol):
+    """Where the jobs run: :class:`LocalPool` or :class:`RayCluster`."""
+
+    def describe(self) -> str: ...
+
+    def run(self, specs: Sequence[tuple[int, JobSpec]], report: Report) -> None: ...
 
 
 class LocalPool:
@@ -79,6 +88,7 @@ class RayCluster:
         self.cpus = cpus
         self.ray = import_ray()
         self._described = "Ray"
+        self._connected = False
 
     def describe(self) -> str:
         return self._described
@@ -103,7 +113,8 @@ class RayCluster:
                     self._cancel(list(pending))
                     raise
         finally:
-            ray.shutdown()  # stops a local cluster; leaves a joined one running
+            if self._connected:  # an interrupted join is left to the process's end (see _join)
+                ray.shutdown()  # stops a local cluster; leaves a joined one running
 
     def _start(self) -> None:
         """Start the local cluster, or join the one at ``address``; a cluster that cannot be
@@ -111,9 +122,14 @@ class RayCluster:
         local = self.address is None
         if self.address is not None:
             _answers(self.address)
+        options = dict(address="local" if local else self.address, num_cpus=self.cpus if local else None,
+                       include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
         try:
-            self.ray.init(address="local" if local else self.address, num_cpus=self.cpus if local else None,
-                          include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING)
+            if local:
+                self.ray.init(**options)
+            else:
+                _join(self.ray, options)
+            self._connected = True
         except (ConnectionError, ValueError, RuntimeError) as err:
             where = "start a local Ray cluster" if local else f"join the Ray cluster at {self.address}"
             raise MissionError(f"cannot {where}: {err} (a cluster with token authentication needs its token on "
@@ -126,6 +142,47 @@ class RayCluster:
             self.ray.cancel(ref)
         if refs:
             self.ray.wait(refs, num_returns=len(refs), timeout=10)
+
+
+def _join(ray: Any, options: dict[str, Any]) -> None:
+    """``ray.init(**options)`` for a running cluster, in a thread of its own while the main
+    thread waits, so that Ctrl-C (SIGINT) or SIGTERM stops the batch at once.
+
+    Joining waits inside Ray's native code, where Python's signal handlers cannot run: an
+    address that accepts connections and never answers (a wrong port, a firewall that holds
+    connections) kept the batch deaf to Ctrl-C for the 30 s Ray waits for it.  The main thread
+    only waits here, so its handler raises :class:`~mutrose_cp.interrupt.Interrupted` at once.
+    The joining thread cannot be stopped; it is a daemon, and an interrupted command ends its
+    process right away (``process.exit_process``), the thread with it."""
+    failed: list[BaseException] = []
+    done = threading.Event()
+
+    def join() -> None:
+        try:
+            ray.init(**options)
+        except BaseException as err:  # noqa: BLE001 - handed to the main thread
+            failed.append(err)
+        finally:
+            done.set()
+
+    quiet = _NotMainThreadWarning()
+    logging.getLogger("ray._private.worker").addFilter(quiet)
+    try:
+        threading.Thread(target=join, name="ray-join", daemon=True).start()
+        while not done.wait(JOIN_POLL_SECONDS):
+            pass
+    finally:
+        logging.getLogger("ray._private.worker").removeFilter(quiet)
+    if failed:
+        raise failed[0]
+
+
+class _NotMainThreadWarning(logging.Filter):
+    """Ray warns that it sets no SIGTERM handler when it is started outside the main thread: the
+    batch handles SIGTERM itself, so the warning says nothing to the user."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "not the main thread" not in record.getMessage()
 
 
 def _answers(address: str) -> None:

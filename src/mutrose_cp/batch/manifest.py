@@ -25,7 +25,16 @@ from ..errors import MissionError, Problem, closest, located
 from ..io.text import decode_utf8, parse_json, read_bytes
 
 FIELDS = ("id", "command", "inputs", "options", "output")
-BATCH_FLAGS = ("-q", "--json-summary")  # what every job is run with: its summary is read, not printed
+# what every job is run with, when its command has them: its summary is read, not printed
+BATCH_FLAGS = ("-q", "--json-summary")
+
+
+def batch_flags(command: str) -> tuple[str, ...]:
+    """The :data:`BATCH_FLAGS` that ``command`` takes (``export-hddl`` prints no summary)."""
+    from .parser import known_flags
+
+    flags = known_flags(command)
+    return tuple(flag for flag in BATCH_FLAGS if flag in flags) if flags else BATCH_FLAGS
 
 
 @dataclass(frozen=True)
@@ -42,7 +51,7 @@ class Job:
     def command_line(self) -> tuple[str, ...]:
         """The arguments after ``mutrose-cp``."""
         output = ("-o", self.output) if self.output is not None else ()
-        return (self.command, *self.inputs, *self.options, *output, *BATCH_FLAGS)
+        return (self.command, *self.inputs, *self.options, *output, *batch_flags(self.command))
 
     def __str__(self) -> str:
         """A short name for messages: the command and the names of its inputs."""
@@ -89,6 +98,7 @@ def _json_jobs(text: str, source: str) -> list[Job]:
         job = _job(entry, where, i + 1, problems, _json_list)
         if job is not None:
             jobs.append(job)
+    _refuse_repeated_ids(jobs, problems)
     if problems:
         raise MissionError(problems)
     return jobs
@@ -98,7 +108,26 @@ def _csv_jobs(text: str, source: str) -> list[Job]:
     """A CSV manifest: a header row naming the columns (``command,inputs,options,output,id``), one
     job per row; ``inputs`` and ``options`` are split like a shell line (quote paths with
     spaces)."""
+    _refuse_nul(text, source)
     reader = csv.DictReader(io.StringIO(text, newline=""))
+    try:
+        return _csv_rows(reader, source)
+    except csv.Error as err:  # a field over the csv module's size limit, a damaged quote
+        raise MissionError(f"invalid CSV: {err}", located(source, reader.line_num)) from None
+
+
+def _refuse_nul(text: str, source: str) -> None:
+    """A NUL byte, located: no path or argument can hold one (a binary file given as the
+    manifest, or a damaged one)."""
+    at = text.find("\0")
+    if at >= 0:
+        line = text.count("\n", 0, at) + 1
+        column = at - (text.rfind("\n", 0, at) + 1) + 1
+        raise MissionError("the manifest holds a NUL byte, which no path or argument can hold (is it a binary file?)",
+                           located(source, line, column))
+
+
+def _csv_rows(reader: csv.DictReader[str], source: str) -> list[Job]:
     header = reader.fieldnames or []
     problems = [Problem(located(source, 1), f"unknown column {name!r}" + _suggest(name))
                 for name in header if name not in FIELDS]
@@ -116,9 +145,21 @@ def _csv_jobs(text: str, source: str) -> list[Job]:
         job = _job(fields, where, len(jobs) + 1, problems, _csv_list)
         if job is not None:
             jobs.append(job)
+    _refuse_repeated_ids(jobs, problems)
     if problems:
         raise MissionError(problems)
     return jobs
+
+
+def _refuse_repeated_ids(jobs: list[Job], problems: list[Problem]) -> None:
+    """Two jobs with one id: the results file, the messages and the summary name a job by its
+    id, so one would pass for the other."""
+    first: dict[str, Job] = {}
+    for job in jobs:
+        if job.id in first:
+            problems.append(Problem(job.where, f"job id {job.id!r} is also the id of the job at "
+                                               f"{first[job.id].where}: give each job its own id"))
+        first.setdefault(job.id, job)
 
 
 def _suggest(name: str) -> str:
@@ -163,9 +204,20 @@ def _job(fields: dict[str, Any], where: str, number: int, problems: list[Problem
         problems.append(Problem(where, "output: expected a file name"))
     if not isinstance(ident, (str, int)) or isinstance(ident, bool):
         problems.append(Problem(where, "id: expected a name or a number"))
+    if len(problems) == before:
+        _refuse_nul_fields(where, {"command": [command], "inputs": inputs, "options": options,
+                                   "output": [output], "id": [ident]}, problems)
     if len(problems) > before or not isinstance(command, str) or inputs is None or options is None:
         return None
     return Job(str(ident), command, inputs, options, output, where)
+
+
+def _refuse_nul_fields(where: str, values: dict[str, Any], problems: list[Problem]) -> None:
+    """A NUL character in a field (``"\\u0000"`` in JSON): no path or argument can hold one, and
+    the job could not even be started."""
+    for key, items in values.items():
+        if any(isinstance(v, str) and "\0" in v for v in items or ()):
+            problems.append(Problem(f"{where}.{key}", "holds a NUL character, which no path or argument can hold"))
 
 
 # -- the glob form -----------------------------------------------------------------------------
@@ -201,47 +253,47 @@ def jobs_from_glob(pattern: str, command: str, options: Iterable[str], *, missio
 
 def check_jobs(jobs: list[Job], base: Path) -> list[argparse.Namespace]:
     """Parse every job's command line with the ``mutrose-cp`` parser; the parsed arguments of each,
-    or every problem at once (an unknown command or option, an output given twice, two jobs
-    writing the same file)."""
-    from ..cli import build_parser  # the command line imports this package's parser only
+    or every problem at once (an unknown command or option, an output given twice).  What the
+    jobs write is checked once their files are known (:mod:`.safety`); ``base`` is the jobs'
+    folder."""
+    from .parser import mutrose_parser
 
-    parser = build_parser()
+    parser = mutrose_parser()
     problems: list[Problem] = []
     parsed = []
-    writers: dict[Path, Job] = {}
     for job in jobs:
-        args = _check_job(parser, job, problems)
-        parsed.append(args)
-        if args is None or job.output is None:
-            continue
-        target = (base / job.output).resolve()
-        if target in writers:
-            problems.append(Problem(job.where, f"job {job.id} writes {job.output}, as job {writers[target].id} does: "
-                                               "give each job its own output"))
-        writers[target] = job
+        parsed.append(_check_job(parser, job, problems))
     if problems:
         raise MissionError(problems)
     return parsed  # type: ignore[return-value]  # no None is left without a problem
 
 
 def _check_job(parser: argparse.ArgumentParser, job: Job, problems: list[Problem]) -> argparse.Namespace | None:
+    """The job's command line parsed, or its problem added to ``problems``.  The job's output
+    goes first (``COMMAND -o OUTPUT INPUTS OPTIONS``), so that a command whose ``-o`` is required
+    parses, and a ``-o`` among the options, which would come later and win, shows."""
+    from .parser import path_options
+
     where = f"{job.where}: job {job.id}"
     if job.command == "batch":
         problems.append(Problem(where, "a batch job cannot be a batch: list its jobs in this manifest"))
         return None
-    args, error = _parse(parser, [job.command, *job.inputs, *job.options, *BATCH_FLAGS])
+    options = path_options(job.command)  # none for a command the parser does not know: it says so below
+    takes_output = any(option.dest == "output" for option in options)
+    if job.output is not None and options and not takes_output:
+        problems.append(Problem(where, f"{job.command} writes no output file: drop the job's output"))
+        return None
+    if job.output == "-":
+        problems.append(Problem(where, "output -: a job's standard output carries its summary; give a file name"))
+        return None
+    output = ["-o", job.output] if job.output is not None and takes_output else []
+    args, error = _parse(parser, [job.command, *output, *job.inputs, *job.options, *batch_flags(job.command)])
     if args is None:
         problems.append(Problem(where, f"mutrose-cp {job.command}: {error}"))
         return None
-    takes_output = hasattr(args, "output")
-    if takes_output and args.output is not None:
+    if takes_output and args.output != job.output:
         problems.append(Problem(where, "the options name an output (-o): give it as the job's output"))
-    elif job.output is not None and not takes_output:
-        problems.append(Problem(where, f"{job.command} writes no output file: drop the job's output"))
-    elif job.output == "-":
-        problems.append(Problem(where, "output -: a job's standard output carries its summary; give a file name"))
-    elif job.output is not None:
-        args.output = job.output
+        return None
     return args
 
 

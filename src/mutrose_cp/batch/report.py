@@ -11,12 +11,13 @@ import time
 from collections import Counter
 from typing import TextIO
 
-from .job import OK, STATUSES
+from .statuses import OK, STATUSES
 from .manifest import Job
 from .results import ResultLine
 
 BAR_WIDTH = 24
 LISTED_FAILURES = 20  # the summary names at most this many jobs that did not end well
+WIDTH = max(len(status) for status in STATUSES)  # of the status column
 
 
 def _duration(seconds: float) -> str:
@@ -76,11 +77,11 @@ def summary_table(jobs: list[Job], results: list[ResultLine | None], skipped: in
     lines = [f"batch: {len(jobs)} jobs, {ran} run on {engine} in {seconds:.1f} s, {skipped} skipped "
              f"(results present and inputs unchanged)"
              + (f", {len(jobs) - len(finished)} not run" if len(finished) < len(jobs) else ""),
-             f"  {'status':<9} {'jobs':>6} {'total s':>10} {'max s':>9} {'max MB':>9}"]
+             f"  {'status':<{WIDTH}} {'jobs':>6} {'total s':>10} {'max s':>9} {'max MB':>9}"]
     for status in STATUSES:
         rows = [line for _, line in finished if line.status == status]
         if rows:
-            lines.append(f"  {status:<9} {counts[status]:>6} {sum(r.seconds for r in rows):>10.1f} "
+            lines.append(f"  {status:<{WIDTH}} {counts[status]:>6} {sum(r.seconds for r in rows):>10.1f} "
                          f"{max(r.seconds for r in rows):>9.1f} {max(r.peak_mb for r in rows):>9.1f}")
     bad = [(job, line) for job, line in finished if line.status != OK]
     if bad:

@@ -1,17 +1,18 @@
 """The results of a batch: one JSON line per finished job, and what a rerun can skip.
 
 Each job gets an **input hash**: SHA-256 over the mutrose-cp version, the job's command line
-(command, inputs, options, output) and the contents of every file it reads: the four mission
+(command, inputs, options, output) and the contents of every file it *reads*: the four mission
 files (HDDL, goal model, configuration and the world the configuration or ``--world`` names,
 resolved exactly as the command resolves them) and any other argument that names a file
-(``--costs``, the output ``validate`` checks).  A rerun skips a job whose line is present with
-the same hash: the same command on the same bytes.  A job stopped at its time or memory limit is
-run again when the rerun's limit is higher.
+(``--costs``, the output ``validate`` checks).  The files a job *writes* (``-o``, ``--schedule``,
+``--gantt``, ``--ihtn``, ...) are never hashed: they change on every run, and a rerun would see a
+new job each time.  A rerun skips a job whose line is present with the same hash: the same
+command on the same bytes.  A job stopped at its time or memory limit is run again when the
+rerun's limit is higher; one interrupted from outside the batch is always run again.
 
-The file is written as a journal while the batch runs (one whole line per finished job, appended
-and flushed at once, so an interrupt loses no finished job and records no unfinished one), then
-rewritten atomically in manifest order at the end, so its order does not depend on which worker
-finished first.  The fields of a line are always in the order of :class:`ResultLine`.
+The results file itself is kept by :mod:`.journal`.  A line read from it is checked field by
+field (:meth:`ResultLine.parse`): a line damaged by hand or by a crash is reported and skipped,
+never trusted and never a traceback.
 """
 from __future__ import annotations
 
@@ -19,16 +20,56 @@ import argparse
 import contextlib
 import hashlib
 import json
+import math
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
-from typing import IO, Any, Callable, Iterable
+from typing import Any, Callable
 
 from .. import __version__
-from ..errors import MissionError
-from ..output_file import atomic_writer
-from .job import MEMORY, TIMEOUT, JobSpec, Outcome
+from .files import FileFinder, JobFiles
+from .inputs import file_digest
+from .job import JobSpec, Outcome
+from .statuses import INTERRUPTED, MEMORY, STATUSES, TIMEOUT
 from .manifest import Job
+
+
+def _text(value: Any) -> bool:
+    return isinstance(value, str)
+
+
+def _texts(value: Any) -> bool:
+    return isinstance(value, list) and all(isinstance(v, str) for v in value)
+
+
+def _whole(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _number(value: Any) -> bool:
+    """A finite number (an integer too large for a float, 1e400 written out, is none)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+def _or_null(check: Callable[[Any], bool]) -> Callable[[Any], bool]:
+    return lambda value: value is None or check(value)
+
+
+# each field's check and what it expects, for the message when a line does not pass
+_FIELD_CHECKS: dict[str, tuple[Callable[[Any], bool], str]] = {
+    "id": (_text, "a string"), "command": (_text, "a string"), "inputs": (_texts, "a list of strings"),
+    "options": (_texts, "a list of strings"), "output": (_or_null(_text), "a string or null"),
+    "input_hash": (_text, "a string"), "status": (lambda v: v in STATUSES, "one of " + ", ".join(STATUSES)),
+    "exit_code": (_or_null(_whole), "a whole number or null"), "seconds": (_number, "a number"),
+    "peak_mb": (_number, "a number"), "time_limit": (_or_null(_number), "a number or null"),
+    "memory_mb": (_whole, "a whole number"), "summary": (_or_null(lambda v: isinstance(v, dict)), "an object or null"),
+    "problems": (_texts, "a list of strings"),
+}
 
 
 @dataclass(frozen=True)
@@ -56,17 +97,39 @@ class ResultLine:
                    outcome.status, outcome.exit_code, outcome.seconds, outcome.peak_mb, spec.time_limit,
                    spec.memory_mb, outcome.summary, outcome.problems)
 
+    @classmethod
+    def parse(cls, text: str) -> "ResultLine":
+        """The result a line of the results file holds; ``ValueError`` saying what is wrong with
+        it (not JSON, a field missing, unknown or of the wrong type)."""
+        try:
+            data = json.loads(text)
+        except RecursionError:  # [[[[...: not a result, whatever else it is
+            raise ValueError("nested too deeply") from None
+        if not isinstance(data, dict):
+            raise ValueError("not a JSON object")
+        names = [f.name for f in fields(cls)]
+        missing = [n for n in names if n not in data]
+        unknown = [k for k in data if k not in _FIELD_CHECKS]
+        if missing or unknown:
+            raise ValueError("; ".join([*(f"no field {n!r}" for n in missing[:3]),
+                                        *(f"unknown field {k!r}" for k in unknown[:3])]))
+        for name in names:
+            check, expected = _FIELD_CHECKS[name]
+            if not check(data[name]):
+                raise ValueError(f"{name}: expected {expected}, found {json.dumps(data[name])[:60]}")
+        return cls(**data)
+
     def text(self) -> str:
         return json.dumps(asdict(self), ensure_ascii=False) + "\n"
 
     def settles(self, spec: JobSpec) -> bool:
         """Whether this result stands for a run under ``spec``'s limits: any finished result does,
-        except a time or memory stop when the limit is now higher."""
+        except a time or memory stop when the limit is now higher, and an interruption."""
         if self.status == TIMEOUT:
             return _no_higher(spec.time_limit, self.time_limit)
         if self.status == MEMORY:
             return _no_higher(spec.memory_mb or None, self.memory_mb or None)
-        return True
+        return self.status != INTERRUPTED
 
 
 def _no_higher(now: float | None, then: float | None) -> bool:
@@ -84,41 +147,24 @@ class InputHasher:
 
     def __init__(self, base: Path) -> None:
         self.base = base
+        self.finder = FileFinder()
         self._digests: dict[tuple[str, int, int], str] = {}
-        self._worlds: dict[tuple[str, int, int, bool], Path] = {}  # a configuration read by many jobs: read once
 
-    def job_hash(self, job: Job, args: argparse.Namespace) -> str:
+    def files(self, job: Job, args: argparse.Namespace) -> JobFiles:
+        """What ``job`` reads and writes, found from the jobs' folder (a FIFO or a device among
+        its inputs: a located error)."""
+        with contextlib.chdir(self.base):  # the job's paths are relative to where it runs
+            return self.finder.job_files(job, args)
+
+    def job_hash(self, job: Job, files: JobFiles) -> str:
         h = hashlib.sha256()
         h.update(json.dumps([__version__, job.command, job.inputs, job.options, job.output]).encode())
-        with contextlib.chdir(self.base):  # the job's paths are relative to where it runs
-            for name, digest in self._files(job, args):
-                h.update(f"\n{name}\0{digest}".encode())
+        with contextlib.chdir(self.base):
+            for name in files.reads:
+                h.update(f"\n{name}\0{self._digest(name)}".encode())
+        if files.unresolved:
+            h.update(f"\nunresolved\0{files.unresolved}".encode())
         return "sha256:" + h.hexdigest()
-
-    def _files(self, job: Job, args: argparse.Namespace) -> list[tuple[str, str]]:
-        named = [a for a in (*job.inputs, *job.options) if os.path.isfile(a)]
-        try:
-            mission = [str(p) for p in mission_files(job, args, self._world)]
-        except (MissionError, OSError) as err:  # the job will fail on it: the reason stands in for the files
-            return [(name, self._digest(name)) for name in named] + [("unresolved", str(err))]
-        return [(name, self._digest(name)) for name in sorted(set(named) | set(mission))]
-
-    def _world(self, config: Path, lenient: bool) -> Path:
-        """The world file ``config`` names (as the command resolves it from here)."""
-        from ..io.config import load_configuration
-        from ..mission import resolve_config_path
-
-        def read() -> Path:
-            return resolve_config_path(load_configuration(config, lenient=lenient).world_db.path, config)
-
-        try:
-            st = os.stat(config)
-        except OSError:  # the reader says what is wrong with it
-            return read()
-        key = (os.path.realpath(config), st.st_size, st.st_mtime_ns, lenient)
-        if key not in self._worlds:
-            self._worlds[key] = read()
-        return self._worlds[key]
 
     def _digest(self, name: str) -> str:
         try:
@@ -127,79 +173,5 @@ class InputHasher:
             return f"unreadable: {err.strerror}"
         key = (os.path.realpath(name), st.st_size, st.st_mtime_ns)
         if key not in self._digests:
-            with open(name, "rb") as fh:
-                self._digests[key] = hashlib.file_digest(fh, "sha256").hexdigest()
+            self._digests[key] = file_digest(name)
         return self._digests[key]
-
-
-def mission_files(job: Job, args: argparse.Namespace, world_of: Callable[[Path, bool], Path]) -> list[Path]:
-    """The HDDL, goal model, configuration and world a job reads, found as the command finds them
-    (``find_mission_files``, ``--world`` or the configuration's world path, which ``world_of``
-    reads).  Empty for a job whose inputs are not a mission."""
-    from ..mission import find_mission_files
-
-    first = Path(job.inputs[0])
-    if first.is_dir():
-        hddl, gm, config = find_mission_files(first, getattr(args, "config", None),
-                                              hddl_name=getattr(args, "hddl", None), gm_name=getattr(args, "gm", None))
-    elif len(job.inputs) >= 3:
-        hddl, gm, config = (Path(p) for p in job.inputs[:3])
-    else:
-        return []
-    world = getattr(args, "world", None)
-    if world is None:
-        world = world_of(config, getattr(args, "lenient_xml", False))
-    return [hddl, gm, config, Path(world)]
-
-
-# -- the results file ----------------------------------------------------------------------------
-
-class ResultsFile:
-    """The results of earlier runs (by input hash) and the journal of this one."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.lines: dict[str, ResultLine] = {}
-        self.ignored: list[str] = []  # lines that are not results (a write cut short by a crash)
-        self._journal: IO[str] | None = None
-        if path.exists():
-            self._read()
-
-    def _read(self) -> None:
-        with open(self.path, encoding="utf-8") as fh:
-            for number, text in enumerate(fh, start=1):
-                try:
-                    line = ResultLine(**json.loads(text))
-                except (ValueError, TypeError):
-                    self.ignored.append(f"{self.path}:{number}: not a result line: ignored, its job runs again")
-                    continue
-                self.lines[line.input_hash] = line
-
-    def done(self, input_hash: str, spec: JobSpec) -> ResultLine | None:
-        """The result that settles the job with this hash under ``spec``'s limits, if present."""
-        line = self.lines.get(input_hash)
-        return line if line is not None and line.settles(spec) else None
-
-    def record(self, line: ResultLine) -> None:
-        """Append one finished job's line to the journal at once."""
-        if self._journal is None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._journal = open(self.path, "a", encoding="utf-8")  # noqa: SIM115 - closed by close()
-        self._journal.write(line.text())
-        self._journal.flush()
-        self.lines[line.input_hash] = line
-
-    def close(self, order: Iterable[str]) -> None:
-        """End the journal and rewrite the file atomically: the lines of the manifest's jobs in its
-        order (``order``: their input hashes), then the lines of jobs it no longer lists."""
-        if self._journal is not None:
-            self._journal.close()
-            self._journal = None
-        if not self.lines:
-            return
-        ordered = [h for h in dict.fromkeys(order) if h in self.lines]
-        listed = set(ordered)
-        rest = [h for h in self.lines if h not in listed]
-        with atomic_writer(self.path) as fh:
-            for h in (*ordered, *rest):
-                fh.write(self.lines[h].text())
