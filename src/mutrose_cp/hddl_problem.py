@@ -20,7 +20,7 @@ from .annotation_tree import GOAL, TASK, RatNode
 from .errors import MissionError
 from .expansion import TaskInstance
 from .io.hddl_writer import STANDARD_NAME, ProblemData
-from .mission import Mission
+from .pipeline.stages import MissionStages
 from .model import Domain, InitialState
 from .model.domain import Parameter, Subtask
 
@@ -29,7 +29,7 @@ class ProblemNotExpressible(MissionError):
     """The mission has no HDDL problem form (the message says why)."""
 
 
-def mission_problem(mission: Mission) -> tuple[ProblemData, list[str]]:
+def mission_problem(mission: MissionStages) -> tuple[ProblemData, list[str]]:
     """The HDDL problem of ``mission`` and the warnings about it (objects left out)."""
     domain = mission.domain
     order = _total_order(mission.expansion.rat)

@@ -29,12 +29,13 @@ from .constraints import EC, FB, SEQ
 from .errors import MissionError, NoDecompositionError
 from .model.task_graph import DecompositionVertex, EdgeKind, GoalVertex, OperatorVertex, ScopeVertex, TaskVertex
 from .output_file import atomic_writer
+from .solve import decomposers
 
 if TYPE_CHECKING:  # pragma: no cover
     from .constraints import Constraint
     from .expansion import TaskInstance
     from .htn import Step
-    from .mission import Mission
+    from .pipeline.stages import MissionStages
     from .model import ForAll, GMNode
     from .model.task_graph import Edge, TaskGraph, Vertex
 
@@ -284,7 +285,7 @@ def _action_text(step: "Step", binding: Mapping[str, object]) -> str:
 # Goal model view
 
 
-def goal_model_dot(mission: "Mission", rankdir: str = "LR") -> str:
+def goal_model_dot(mission: "MissionStages", rankdir: str = "LR") -> str:
     """DOT text of the expanded goal model (the runtime annotation tree).
 
     Goals are rounded boxes labelled with their text (query goals in yellow, with the query and
@@ -305,7 +306,7 @@ class _GoalModelView:
     forAll position (``_2``, ``_2_1``) down the tree, so that the copies of a goal under
     different forAll elements get distinct node ids."""
 
-    def __init__(self, mission: "Mission", rankdir: str) -> None:
+    def __init__(self, mission: "MissionStages", rankdir: str) -> None:
         self.gm = mission.goal_model
         self.instances = {i.id: i for i in mission.expansion.instances}
         self.kept: set[str] | None
@@ -425,7 +426,7 @@ _EDGE_ATTRS: dict[EdgeKind, dict[str, object]] = {
 }
 
 
-def task_graph_dot(mission: "Mission", rankdir: str = "LR") -> str:
+def task_graph_dot(mission: "MissionStages", rankdir: str = "LR") -> str:
     """DOT text of the Task Graph (the minimal one the constraints and decompositions use).
 
     Operator vertices are ellipses (``;``, ``#``, ``FALLBACK``, ``OR`` when the children are
@@ -497,20 +498,20 @@ def _task_graph_edge(dot: _Dot, tg: "TaskGraph", ids: Mapping[int, str], edge: "
 # One mission decomposition
 
 
-def nth_decomposition(mission: "Mission", index: int) -> list[int]:
+def nth_decomposition(mission: "MissionStages", index: int) -> list[int]:
     """The decomposition vertices of valid mission decomposition ``index`` (0-based; negative
-    counts from the end), in the order of ``list(mission.decomposition_space())`` but computed
+    counts from the end), in the order of ``list(Mission.decomposition_space())`` but computed
     directly from the components (mixed radix, last component fastest), so that any index of a
     huge space is cheap."""
     return _nth(mission, index)[0]
 
 
-def _nth(mission: "Mission", index: int) -> tuple[list[int], int, int]:
+def _nth(mission: "MissionStages", index: int) -> tuple[list[int], int, int]:
     """(decomposition vertices, index >= 0, number of valid mission decompositions)."""
     if not mission.task_graph.tasks():
         raise NoDecompositionError("the mission has no task instances (no entity of the world matched its "
                                    "queries): no mission decomposition to draw", str(mission.goal_model.source))
-    space = mission.decomposition_space()
+    space = decomposers.decomposition_space(mission)
     total = space.count
     if total == 0:
         raise NoDecompositionError("no valid mission decomposition: nothing to draw",
@@ -538,9 +539,9 @@ def _nth(mission: "Mission", index: int) -> tuple[list[int], int, int]:
     return sorted(decs), index, total
 
 
-def decomposition_dot(mission: "Mission", index: int = 0, rankdir: str = "LR") -> str:
+def decomposition_dot(mission: "MissionStages", index: int = 0, rankdir: str = "LR") -> str:
     """DOT text of valid mission decomposition ``index`` (0-based, in the order of
-    ``list(mission.decomposition_space())``; negative indices count from the end).
+    ``list(Mission.decomposition_space())``; negative indices count from the end).
 
     Each chosen task decomposition is a box with its output key, id, task, location and numbered
     actions (parameters replaced by their values).  SEQ constraints are black arrows, FB
@@ -614,7 +615,7 @@ def _forall_groups(tg: "TaskGraph", chosen: list[int]) -> dict[int, list[int]] |
     return groups
 
 
-def _forall_iteration(mission: "Mission") -> str | None:
+def _forall_iteration(mission: "MissionStages") -> str | None:
     """The iteration variable of the forAll goal at the root of the Task Graph, if known."""
     root = mission.task_graph.vertices[0]
     goal = mission.goal_model.node(root.goal) if isinstance(root, OperatorVertex) and root.goal else None
@@ -721,7 +722,7 @@ def _write(path: Path, text: str) -> None:
         fh.write(text.encode("utf-8"))
 
 
-def view_dot(mission: "Mission", view: str, index: int = 0, rankdir: str | None = None) -> str:
+def view_dot(mission: "MissionStages", view: str, index: int = 0, rankdir: str | None = None) -> str:
     """DOT text of one of :data:`VIEWS` (``goal-model``, ``task-graph``, ``decomposition``)."""
     kw = {"rankdir": rankdir} if rankdir else {}
     if view == "goal-model":
