@@ -458,7 +458,7 @@ def _stamped(tg: TaskGraph) -> Constraints | None:
     return out
 
 
-def _runs(part: Constraints, owner: array, region: list[int]) -> list[tuple[int, int, int]] | None:
+def _runs(part: Constraints, owner: "array[int]", region: list[int]) -> list[tuple[int, int, int]] | None:
     """``part`` in runs of one copy each (lo, hi, copy; copy -1 outside the copies); None when a
     constraint joins two copies or a copy and the outside, or a forAll's runs are not together
     and in copy order."""
@@ -483,7 +483,7 @@ def _runs(part: Constraints, owner: array, region: list[int]) -> list[tuple[int,
     return runs
 
 
-def _stamp_runs(tg: TaskGraph, part: Constraints, runs: list[tuple[int, int, int]], owner: array,
+def _stamp_runs(tg: TaskGraph, part: Constraints, runs: list[tuple[int, int, int]], owner: "array[int]",
                 region: list[int], out: Constraints) -> None:
     """Append ``part`` to ``out``, each forAll's built copies' runs replaced by the runs of all its
     copies, in order, each made from its source's."""
