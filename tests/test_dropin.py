@@ -104,10 +104,14 @@ def _json_golden(case) -> bool:
     return mission is None or _golden_path(mission, cfg).read_bytes().lstrip().startswith(b"{")
 
 
+TASK_ID = re.compile(r"^Task \[\S+\] With ID \[(\S+)\] ", re.M)
+
+
 @pytest.mark.parametrize("mission,cfg", [c for c in MISSIONS if _json_golden(c)])
 def test_plug_in_invocation_prints_the_three_blocks(mission, cfg, tmp_path):
-    """``mutrose <hddl> ./temp.txt <config> -p`` in the workspace: the three blocks with the
-    mission's task instances, constraints and decompositions, and the output file."""
+    """``mutrose <hddl> ./temp.txt <config> -p`` in the workspace: the three blocks hold the
+    golden output's task decompositions, constraint counts and mission decompositions (their
+    exact bytes are checked in test_console_exact.py), and the output file is written."""
     require_reference()
     workspace = _copy(mission, tmp_path)
     hddl, gm, config = _relative(mission, cfg)
@@ -119,13 +123,14 @@ def test_plug_in_invocation_prints_the_three_blocks(mission, cfg, tmp_path):
     golden_path = _golden_path(mission, cfg)
     golden = json.loads(golden_path.read_text())
     ids = {t["id"] for t in golden["tasks"].values()}
-    assert set(re.findall(r"^Task \[(\S+)\]", blocks["GENERATED TASK INSTANCES"], re.M)) == ids
-    counts = dict(re.findall(r"^Number of (\w+) constraints: (\d+)$", blocks["MISSION CONSTRAINTS"], re.M))
-    assert {k: int(v) for k, v in counts.items()} == _golden_counts(golden)
-    printed = [frozenset(re.findall(r"^Task \[(\S+)\]", md, re.M))
-               for md in blocks["POSSIBLE MISSION DECOMPOSITIONS"].strip("\n").split("\n\n")]
+    assert set(TASK_ID.findall(blocks["GENERATED TASK INSTANCES"])) == ids
+    counts = dict(re.findall(r"^Number of (\w+)(?: Mission)? [Cc]onstraints: (\d+)$", blocks["MISSION CONSTRAINTS"], re.M))
+    assert {k.lower(): int(v) for k, v in counts.items()} == _golden_counts(golden)
+    missions = re.findall(r"^@+ MISSION (\d+) @+\n(.*?)^@+$", blocks["POSSIBLE MISSION DECOMPOSITIONS"], re.M | re.S)
+    assert [int(n) for n, _ in missions] == list(range(1, len(missions) + 1))
+    printed = [TASK_ID.findall(body) for _, body in missions]
     key = {k: t["id"] for k, t in golden["tasks"].items()}
-    assert sorted(map(sorted, printed)) == sorted(sorted(key[t] for t in md) for md in golden["mission_decompositions"])
+    assert printed == [[key[t] for t in md] for md in golden["mission_decompositions"]]  # the original's order
     _same_output(golden_path, workspace / golden_path.relative_to(mission))
 
 
@@ -235,8 +240,33 @@ def test_verbose_trace_shows_every_stage(tmp_path, capsys, monkeypatch):
                         "initial world state", "task graph", "valid mission decompositions"]
     assert "(G2;(((AT1_1;(G8;AT2_1))#AT3_1)#((AT1_2;(G8;AT2_2))#AT3_2)))" in out
     assert "AT3_1: FurnitureMoving (?rm = RoomA) at location [RoomA], robots 2..4" in out
-    assert "Number of sequential constraints: 8" in out
+    assert "Number of Sequential Mission Constraints: 8" in out  # the -p block's wording
     assert (folder / "output" / "task_output.json").is_file()
+
+
+PROBE = """
+import json, sys, io, contextlib
+from mutrose_cp.dropin import main
+with contextlib.redirect_stdout(io.StringIO()):
+    status = main(sys.argv[1:])
+print(json.dumps([status, sorted(m for m in sys.modules if m.startswith(("mutrose_cp", "ortools", "numpy")))]))
+"""
+
+
+@pytest.mark.parametrize("option", ["-p", "-h"])
+def test_the_plug_in_calls_load_only_what_they_use(option, tmp_path):
+    """``-p`` prints and writes the output file: it loads neither the iHTN export nor the other
+    commands (mutrose-cp's own command line) nor CP-SAT for a mission of tiny components;
+    ``-h`` loads the export."""
+    mission = require_reference() / "missions" / "room-preparation"
+    folder = _copy(mission, tmp_path)
+    run = subprocess.run([sys.executable, "-c", PROBE, *_relative(mission, mission / "configuration" / "configuration.json"),
+                          option], cwd=folder, capture_output=True, text=True, timeout=300)
+    status, modules = json.loads(run.stdout.strip().splitlines()[-1])
+    assert status == 0, run.stderr
+    assert ("mutrose_cp.ihtn" in modules) == (option == "-h")
+    assert not {"mutrose_cp.cli", "ortools", "numpy"} & set(modules)
+    assert "mutrose_cp.lexer_echo" in modules and ("mutrose_cp.console" in modules) == (option == "-p")
 
 
 def test_a_closed_stdout_ends_with_a_message_not_a_traceback(tmp_path):
