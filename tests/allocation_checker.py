@@ -148,11 +148,13 @@ def _travel_times(mission: Mission, fleet: dict):
             if a not in travel["times"].get(b, {}):  # both directions, unless the reverse is given
                 graph.add_edge(b, a, weight=t)
     modelled = bool(points) or bool(travel.get("times"))
-    lengths = dict(nx.all_pairs_dijkstra_path_length(graph)) if modelled else {}
+    lengths: dict[str, dict[str, float]] = {}  # from each place asked about (a road network can be large)
 
     def time(robot: dict, a: str | None, b: str | None) -> int:
         if not modelled or a is None or b is None or a == b:
             return 0
+        if a not in lengths:
+            lengths[a] = nx.single_source_dijkstra_path_length(graph, a)
         return math.ceil(lengths[a][b] / robot.get("speed", 1.0) - 1e-9)
 
     return time

@@ -209,9 +209,11 @@ def test_the_warm_start_spreads_the_deliveries(tmp_path):
 
 
 def test_an_lp_cut_by_its_time_limit_gives_no_bound(tmp_path, monkeypatch, capsys):
-    from mutrose_cp.allocate import allocation
+    """An LP given no time at all (not even skipped for it) is cut while it is being built."""
+    from mutrose_cp.allocate import phases, stages
 
-    monkeypatch.setattr(allocation, "LP_SHARE", 0.0)
+    monkeypatch.setattr(stages, "LP_SHARE", 0.0)
+    monkeypatch.setattr(phases, "MIN_PHASE", 0.0)
     mission = tmp_path / "mission"
     shutil.copytree(DELIVERY, mission, ignore=shutil.ignore_patterns("output"))
     out, schedule = tmp_path / "run.json", tmp_path / "schedule.json"
@@ -378,13 +380,13 @@ def test_a_search_without_any_schedule_reports_the_warm_start(tmp_path, monkeypa
     """A short limit can end CP-SAT in its presolve, before it has taken the hint: the warm
     start's schedule, which is complete, is reported (FEASIBLE, no bound from the search), and
     without a warm start nothing is (exit 4)."""
-    from mutrose_cp.allocate import allocation
+    from mutrose_cp.allocate import stages
     from mutrose_cp.solve.run import IncompleteSolveError
 
     def unfinished(*_args, **_kwargs):
         raise IncompleteSolveError("CP-SAT did not finish the allocation (UNKNOWN)")
 
-    monkeypatch.setattr(allocation, "search", unfinished)
+    monkeypatch.setattr(stages, "search", unfinished)
     mission = Mission.load(*find_mission_files(DELIVERY))
     result = mission.allocate(Fleet.read(FLEET), AllocationOptions(time_limit=20))
     assert result.status == "FEASIBLE" and result.cp_bound is None and result.gap is None

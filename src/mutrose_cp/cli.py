@@ -153,11 +153,11 @@ def _check_fleet(mission: Mission, fleet: Fleet) -> TravelTimes:
 def cmd_allocate(args: argparse.Namespace) -> int:
     """Choose the decomposition, the robots and the schedule together; write the schedule, the
     chosen decomposition (and a Gantt chart)."""
+    start = time.perf_counter()  # the time limit counts from here: loading the solvers and the fleet is part of it
     from .allocate import AllocationOptions, Fleet, Objective
-    from .allocate.output import objective_section, summary_line, write_decomposition, write_schedule
+    from .allocate.output import objective_section, phases_section, summary_line, write_decomposition, write_schedule
 
     hddl, gm, cfg, folder = _inputs(args)
-    start = time.perf_counter()
     objective = Objective.parse(args.objective)
     if args.gantt:
         from .allocate.gantt import gantt_format
@@ -171,7 +171,8 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     schedule_path = Path(args.schedule) if args.schedule else _default_schedule(out_path)
     _refuse_two_on_stdout(args, out_path, schedule_path)
     _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
-    options = AllocationOptions(objective, args.time_limit, args.workers, args.seed, work_limit=args.work_limit)
+    options = AllocationOptions(objective, args.time_limit, args.workers, args.seed, work_limit=args.work_limit,
+                                counted_from=start)
     progress = _AllocationProgress(not args.quiet, objective.name)
     try:
         with phase("allocating"):
@@ -179,20 +180,22 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     finally:
         progress.close()
     with phase("writing the output"), staged_outputs((schedule_path, out_path, args.gantt)):
-        write_schedule(allocation, schedule_path)
-        write_decomposition(allocation, out_path, args.format or mission.config.output.file_type)
-        if args.gantt:
+        if args.gantt:  # first: a chart that cannot be drawn leaves nothing written, not even on stdout
             from .allocate.gantt import write_gantt
 
             write_gantt(allocation, args.gantt)
+        write_schedule(allocation, schedule_path)
+        write_decomposition(allocation, out_path, args.format or mission.config.output.file_type)
     elapsed = time.perf_counter() - start
     schedule = allocation.schedule
     data = {"command": "allocate", "objective": objective_section(allocation), "makespan": schedule.makespan,
             "travel": schedule.travel, "tasks": len(schedule.jobs),
             "robots_used": sum(1 for v in schedule.routes.values() if v), "schedule": str(schedule_path),
-            "output": str(out_path), "gantt": args.gantt, "seconds": round(elapsed, 3)}
+            "output": str(out_path), "gantt": args.gantt, "phases": phases_section(allocation),
+            "seconds": round(elapsed, 3)}
     _summary(args, data, f"{summary_line(allocation)} -> {schedule_path}, {out_path}"
              + (f", {args.gantt}" if args.gantt else "") + f" ({elapsed:.2f} s)", mission)
+    keep_until_exit(mission, fleet, allocation)  # a fleet of 100,000 robots takes a while to free
     return 0
 
 

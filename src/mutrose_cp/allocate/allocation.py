@@ -10,41 +10,36 @@
         --search.py-->   the best schedule within the time left, and CP-SAT's bound
         --schedule.py--> chosen jobs, teams, compacted times, routes
 
-The time limit is the whole run's: the load relaxation may take a tenth of it, the warm start's
-local moves about a seventh (two fifths on a large mission, whose restricted search rarely
-improves a good hint) and the LP a quarter (an LP cut short gives no bound), and the search has
-what is left, at least a tenth.  A work limit instead of the time limit (:mod:`.budget`) is
-shared the same way, the search taking the shares the others leave, so that the schedule does not
-depend on the machine.
+The time limit is the whole run's, and it holds whatever the size of the fleet (:mod:`.phases`):
+the load relaxation may take a tenth of it, the warm start about a seventh (two fifths on a
+large mission, whose restricted search rarely improves a good hint) and the LP a quarter (an LP
+cut short gives no bound), each never more than what leaves the search a tenth; the model takes
+what it needs of the rest, and the search has what is left.  A phase with no time left is
+skipped, one whose share ends first is cut, and each is reported so.  A search that has no time
+left, or finds nothing in it, gives the warm start's schedule.  A work limit instead of the time
+limit (:mod:`.budget`) is shared the same way, the search taking the shares the others leave,
+so that the schedule does not depend on the machine.
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Callable
 
-from ..solve.run import IncompleteSolveError
-from .bounds import LpBound, lp_bound
-from .budget import Budget
+from .bounds import LpBound
 from .fleet import Fleet
-from .load import LoadBound, load_bound
-from .model import AllocationModel, build_model, literal_value
+from .load import LoadBound
+from .model import AllocationModel, literal_value
 from .options import AllocationOptions
-from .problem import AllocationProblem, build_problem
+from .phases import PhaseOutcome, Phases
+from .problem import AllocationProblem
 from .schedule import Schedule, compact
-from .search import Progress, SearchLimits, relative_gap, search
-from .neighbourhood import restrict
-from .warmstart import WarmStart, add_hint, warm_start
+from .search import Progress, SearchOutcome, relative_gap
+from .stages import improve_share, load_stage, lp_stage, model_stage, problem_stage, search_stage, warm_stage
+from .warmstart import WarmStart
 
 if TYPE_CHECKING:
     from ..mission import Mission
     from .travel import TravelTimes
-
-LOAD_SHARE = 0.1  # of the time limit, at most, for the load relaxation
-LP_SHARE = 0.25  # for the LP
-IMPROVE_SHARE = 0.15  # for the local improvement of the warm start, at most
-LARGE_IMPROVE_SHARE = 0.4  # for it on a mission searched within near robots and places
-SEARCH_SHARE = 0.1  # for the search, at least
 
 
 @dataclass(frozen=True)
@@ -60,6 +55,7 @@ class Allocation:
     load: LoadBound | None = None
     seconds: dict[str, float] = field(default_factory=dict)
     restricted: bool = False  # a large mission searched within near robots and places
+    phases: tuple[PhaseOutcome, ...] = ()  # in order, each done, cut, skipped or off (.phases)
 
     @property
     def objective(self) -> int:
@@ -98,65 +94,36 @@ class Allocation:
 def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = AllocationOptions(),
              progress: Callable[[Progress], None] | None = None, travel: TravelTimes | None = None) -> Allocation:
     """Choose a valid mission decomposition, the robots of each task and the times together
-    (see the package docstring).  ``travel``: the fleet's :func:`~.problem.mission_travel`, when
+    (see the module docstring).  ``travel``: the fleet's :func:`~.problem.mission_travel`, when
     the caller has built it to check the fleet (built here otherwise).  Raises
     :class:`~.problem.NoAllocationError` (exit 3) when the fleet cannot execute any valid
     decomposition, and :class:`~mutrose_cp.solve.run.IncompleteSolveError` (exit 4) when the
     time limit passes before any schedule is found."""
-    seconds: dict[str, float] = {}
-    clock = time.perf_counter()
-    budget = options.budget
-    problem = build_problem(mission.decomposition_model(), fleet, travel)
-    load = None
-    if options.lp_bound or options.warm_start:
-        load = load_bound(problem, options.objective, budget.part(LOAD_SHARE), options.workers, options.seed)
-        seconds["load"] = load.seconds
-    warming = time.perf_counter()
-    share = LARGE_IMPROVE_SHARE if restrict(problem).active else IMPROVE_SHARE
-    warm = (warm_start(problem, load.decompositions if load else (), options.objective, budget.part(share),
-                       options.seed, load.value if load else None) if options.warm_start else None)
-    if warm is not None:
-        seconds["warm"] = time.perf_counter() - warming
-    lp = lp_bound(problem, options.objective, budget.part(LP_SHARE)) if options.lp_bound else None
-    if lp is not None:
-        seconds["lp"] = lp.seconds
-    restriction = restrict(problem, warm.teams if warm else None,
-                           {(a, b) for _, a, b in warm.route_arcs(problem)} if warm else None)
-    am = build_model(problem, options.objective, restriction)
-    if warm is not None:
-        add_hint(am, warm)
-    seconds["model"] = time.perf_counter() - clock - sum(seconds.values())
-    improve_only = restriction.active and warm is not None  # large-neighbourhood search from the hint
-    limits = SearchLimits(_search_budget(budget, clock, share), options.workers, options.seed, improve_only)
-    status, bound, schedule, seconds["search"] = _best_schedule(am, limits, progress, warm)
-    if not options.lp_bound:
-        load = None
-    if restriction.active:  # the restricted model's optimum and bound say nothing of the mission's
-        return Allocation(problem, options, "FEASIBLE", schedule, None, lp, load, seconds, restricted=True)
-    return Allocation(problem, options, status, schedule, bound, lp, load, seconds)
+    phases = Phases(options.budget, options.counted_from)
+    problem = problem_stage(phases, mission, fleet, travel)
+    load = load_stage(phases, problem, options)
+    share = improve_share(problem)
+    warm = warm_stage(phases, problem, options, load, share)
+    lp = lp_stage(phases, problem, options)
+    am = model_stage(phases, problem, options, warm)
+    outcome = search_stage(phases, am, options, share, progress, warm)
+    status, bound, schedule = _result(problem, am, outcome, warm)
+    restricted = am is not None and am.restriction.active
+    return Allocation(problem, options, "FEASIBLE" if restricted else status, schedule,
+                      None if restricted else bound,  # a restricted model's optimum and bound say nothing of the mission's
+                      lp, load if options.lp_bound else None, phases.seconds, restricted, tuple(phases.outcomes))
 
 
-def _best_schedule(am: AllocationModel, limits: SearchLimits, progress: Callable[[Progress], None] | None,
-                   warm: WarmStart | None) -> tuple[str, float | None, Schedule, float]:
-    """The search's status, bound and best schedule, and its seconds.  When the search ends
-    before it has any schedule (a short limit can end it in CP-SAT's presolve), the warm start's
-    schedule, a complete one that the search was given as its hint, is the best found: FEASIBLE,
-    without a bound from the search."""
-    started = time.perf_counter()
-    try:
-        outcome = search(am, limits, progress)
-    except IncompleteSolveError:
-        if warm is None:
-            raise
-        return "FEASIBLE", None, warm.schedule(am.problem), time.perf_counter() - started
-    return outcome.status, outcome.bound, _schedule(am, outcome.values), outcome.seconds
-
-
-def _search_budget(budget: Budget, started: float, improve_share: float) -> Budget:
-    """The search's budget: what the clock has left since ``started`` (at least a tenth of the
-    time limit), or the work left over by the other phases' shares."""
-    left = budget.rest(started, 1 - LOAD_SHARE - improve_share)  # in work: the LP counts iterations instead
-    return left if budget.deterministic or left.seconds >= SEARCH_SHARE * budget.seconds else budget.part(SEARCH_SHARE)
+def _result(problem: AllocationProblem, am: AllocationModel | None, outcome: SearchOutcome | None,
+            warm: WarmStart | None) -> tuple[str, float | None, Schedule]:
+    """The status, bound and schedule of the search's solution; without one (skipped, or
+    stopped before its first schedule: a short limit can end it in CP-SAT's presolve), the warm
+    start's schedule, a complete one that the search was given as its hint: FEASIBLE, without a
+    bound from the search."""
+    if outcome is None or am is None:
+        assert warm is not None  # search_stage raised otherwise
+        return "FEASIBLE", None, warm.schedule(problem)
+    return outcome.status, outcome.bound, _schedule(am, outcome.values)
 
 
 def _schedule(am: AllocationModel, values: list[int]) -> Schedule:

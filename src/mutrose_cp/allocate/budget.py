@@ -14,9 +14,15 @@ give the same schedule, byte for byte, on any machine and under any load:
   at a time: it runs to its answer, however long that takes.
 
 Phases that take "what is left" of a clock budget take a fixed share of a work budget.
+
+A clock budget also gives each phase a :class:`Deadline`: the work a phase does before it hands
+anything to a solver (building a model, a table, a plan) is checked against it, so that a phase
+whose time is up stops there (:class:`OutOfTime`) instead of running on past the time limit.  A
+work budget has no deadline: what it does must not depend on the clock.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Callable
@@ -26,6 +32,33 @@ if TYPE_CHECKING:
 
 JOB_STEPS_PER_UNIT = 500_000  # job schedulings by the local moves' evaluator per unit of work (about a second here)
 LP_ITERATIONS = 200  # Clarabel's iterations in a work budget (its default limit)
+
+
+class OutOfTime(Exception):
+    """A phase's deadline passed while it was building: it gives nothing (see :mod:`.phases`)."""
+
+
+@dataclass(frozen=True)
+class Deadline:
+    """A moment on ``time.perf_counter()``'s clock (never, by default) that long loops check."""
+
+    at: float = math.inf
+
+    def left(self) -> float:
+        """Seconds until the deadline (0 once it has passed; infinite without one)."""
+        return max(0.0, self.at - time.perf_counter()) if math.isfinite(self.at) else math.inf
+
+    def passed(self) -> bool:
+        return math.isfinite(self.at) and time.perf_counter() >= self.at
+
+    def check(self) -> None:
+        """Raise :class:`OutOfTime` once the deadline has passed: called once per job or robot by
+        the loops that grow with the fleet, it costs a clock read."""
+        if self.passed():
+            raise OutOfTime
+
+
+NEVER = Deadline()
 
 
 @dataclass(frozen=True)
@@ -51,6 +84,11 @@ class Budget:
         if self.work is not None:
             return self.part(share)
         return replace(self, seconds=max(0.0, self.seconds - (time.perf_counter() - started)))
+
+    def deadline(self) -> Deadline:
+        """The moment this budget ends, from now: none on a work budget (its phases must not
+        depend on the clock)."""
+        return NEVER if self.work is not None else Deadline(time.perf_counter() + self.seconds)
 
     def limit(self, parameters: cmh.SatParameters, workers: int) -> None:
         """Put the limit on CP-SAT's parameters."""

@@ -17,17 +17,24 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
+import sys
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
 from ..errors import MissionError, Problem, closest
-from ..io.located_json import LocatedJson, Path, parse_located_json, path_text, read_located_json
+from ..io.located_json import LocatedJson, OutOfRangeNumber, Path, parse_located_json, path_text, read_located_json
 
 METRICS = ("euclidean", "manhattan")
 MAX_DURATION = 10**6  # per action: a schedule's times stay far inside CP-SAT's 64-bit range
 MAX_TIME = 10**6  # per travel-table entry (at speed 1)
 MAX_COORDINATE = 10**9
 MIN_SPEED = 10**-3  # the slowest robot's longest trip (coordinates at their bound) stays near 10^12 units
+# half of a UTF-16 pair, alone: JSON's "\ud800" decodes to it, but it is no text (no UTF-8 encodes it, and
+# the solver's names and the schedule file could not hold it)
+LONE_SURROGATE = re.compile("[\ud800-\udfff]")
+ESCAPED_SURROGATE = re.compile(r"\\u[dD][89a-fA-F]")
+ROBOT_KEYS = frozenset({"name", "capabilities", "start", "speed"})
 
 
 @dataclass(frozen=True)
@@ -106,6 +113,11 @@ class _Reader:
     def __init__(self, doc: LocatedJson) -> None:
         self.doc = doc
         self.problems: list[Problem] = []
+        # a decoded string holds a lone surrogate only where the text escapes one (\\udXXX) or, in a
+        # text given by a program (Fleet.parse), holds one: a text without either is not searched
+        # string by string
+        self.escapes = ESCAPED_SURROGATE.search(doc.text) is not None or LONE_SURROGATE.search(doc.text) is not None
+        self.lists: dict[tuple[str, ...], frozenset[str]] = {}  # capability lists read already
 
     def problem(self, path: Path, message: str, hint: str = "", *, key: bool = False) -> None:
         where = self.doc.at(path, key=key)
@@ -127,20 +139,40 @@ class _Reader:
 
     def string(self, value: Any, path: Path) -> str | None:
         if isinstance(value, str) and value.strip():
-            return value.strip()
+            return value.strip() if self.text(value, path) else None
         self.problem(path, f"expected a non-empty string, got {_kind(value)}")
         return None
 
+    def text(self, value: str, path: Path, *, key: bool = False) -> bool:
+        """Whether ``value`` (a name, or a key with ``key``) is text: a lone surrogate is not."""
+        found = LONE_SURROGATE.search(value) if self.escapes else None
+        if found is None:
+            return True
+        self.problem(path, f"{'the key' if key else 'the string'} {value!r} holds a lone surrogate "
+                           f"(\\u{ord(found.group()):04x}), which is no character",
+                     "Write the character itself (or its full \\u pair); a lone half of a UTF-16 pair is not "
+                     "text.", key=key)
+        return False
+
     def number(self, value: Any, path: Path, *, low: float, high: float, whole: bool = False) -> float | None:
+        """``value`` as a number from ``low`` to ``high``.  An integer is compared as it is:
+        one too large for a float (JSON has no limit) is out of range, not an overflow."""
         what = "a whole number" if whole else "a number"
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if isinstance(value, OutOfRangeNumber):
+            self.problem(path, f"{value} is out of range: give a number from {low:g} to {high:g}")
+            return None
+        if isinstance(value, float) and math.isinf(value):  # 1e400: beyond the largest float
+            self.problem(path, f"a number beyond {sys.float_info.max:.3g} is out of range: give a number from "
+                               f"{low:g} to {high:g}")
+            return None
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
             self.problem(path, f"expected {what}, got {_kind(value)}")
             return None
-        if whole and not float(value).is_integer():
+        if whole and isinstance(value, float) and not value.is_integer():
             self.problem(path, f"expected {what}, got {value!r}", "Times are whole time units.")
             return None
         if not low <= value <= high:
-            self.problem(path, f"{value!r} is out of range: give a number from {low:g} to {high:g}")
+            self.problem(path, f"{_kind(value)} is out of range: give a number from {low:g} to {high:g}")
             return None
         return float(value)
 
@@ -155,6 +187,8 @@ class _Reader:
             return {}
         out = {}
         for k, v in value.items():
+            if not self.text(k, (*path, k), key=True):
+                continue
             read = entry(v, (*path, k))
             if read is not None:
                 out[k] = read
@@ -192,27 +226,61 @@ class _Reader:
         return robots
 
     def robot(self, value: Any, path: Path) -> Robot | None:
+        quick = self.plain_robot(value)
+        if quick is not None:
+            return quick
         item = self.obj(value, path, ("name", "capabilities", "start", "speed"))
         if not item:
             if isinstance(value, dict):
                 self.problem(path, "a robot needs a name and its capabilities")
             return None
-        if "name" not in item:
-            self.problem(path, 'missing key "name"')
+        for required in ("name", "capabilities"):
+            if required not in item:
+                self.problem(path, f'missing key "{required}"', 'A robot has a name and lists what it can do: '
+                             '"capabilities": [] for nothing.' if required == "capabilities" else "")
         name = self.string(item["name"], (*path, "name")) if "name" in item else None
-        capabilities = self.capabilities(item.get("capabilities", []), (*path, "capabilities"))
+        capabilities = (self.capabilities(item["capabilities"], (*path, "capabilities"))
+                        if "capabilities" in item else None)
         start = self.string(item["start"], (*path, "start")) if "start" in item else None
         speed = self.number(item.get("speed", 1.0), (*path, "speed"), low=MIN_SPEED, high=MAX_TIME)
         if name is None or capabilities is None or speed is None or ("start" in item and start is None):
             return None
         return Robot(name, capabilities, start, speed)
 
+    def plain_robot(self, value: Any) -> Robot | None:
+        """The robot of an entry with nothing to report, read without the checks that locate a
+        mistake: a fleet of 100,000 robots is mostly such entries, of a few kinds (capability
+        lists read already).  None: the entry is read the full way, which reports what is wrong."""
+        if type(value) is not dict or not value.keys() <= ROBOT_KEYS or self.escapes:
+            return None
+        name, listed, start, speed = (value.get("name"), value.get("capabilities"), value.get("start", ""),
+                                      value.get("speed", 1.0))
+        if type(name) is not str or type(start) is not str or type(listed) is not list:
+            return None
+        try:
+            capabilities = self.lists.get(tuple(listed))
+        except TypeError:  # an object in the list: not a plain entry
+            return None
+        name, start = name.strip(), start.strip()
+        if (capabilities is None or not name or (not start and "start" in value)
+                or type(speed) not in (int, float) or not MIN_SPEED <= speed <= MAX_TIME):
+            return None
+        return Robot(name, capabilities, start or None, float(speed))
+
     def capabilities(self, value: Any, path: Path) -> frozenset[str] | None:
         if not isinstance(value, list):
             self.problem(path, f"expected a list of capability names, got {_kind(value)}")
             return None
+        key = tuple(value) if all(isinstance(c, str) for c in value) else None
+        if key is not None and key in self.lists:  # a fleet of thousands lists a few kinds of robot
+            return self.lists[key]
         names = [self.string(c, (*path, i)) for i, c in enumerate(value)]
-        return None if None in names else frozenset(n for n in names if n is not None)
+        if None in names:
+            return None
+        capabilities = frozenset(n for n in names if n is not None)
+        if key is not None:
+            self.lists[key] = capabilities
+        return capabilities
 
     def durations(self, value: Any) -> Durations:
         path: Path = ("durations",)
@@ -254,8 +322,11 @@ def _kind(value: Any) -> str:
     """How a JSON value is named in messages."""
     if isinstance(value, bool):
         return json.dumps(value)
-    if isinstance(value, (int, float)):
-        return repr(value)
+    if isinstance(value, int) and abs(value) >= 10**20:  # a number of hundreds of digits, said shortly
+        digits = len(str(abs(value)))
+        return f"{str(value)[:8]}... ({digits} digits)"
+    if isinstance(value, (int, float, OutOfRangeNumber)):
+        return str(value) if isinstance(value, OutOfRangeNumber) else repr(value)
     if isinstance(value, str):
         return f"the string {value!r}" if value.strip() else "an empty string"
     if value is None:

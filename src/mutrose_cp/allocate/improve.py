@@ -23,7 +23,9 @@ From a local optimum, a few units moved to random able robots (seeded) start a n
 the best schedule is kept: an iterated local search.  It stops after ``MAX_EVALUATIONS``
 schedules, after ``STALL`` kicks in a row that found nothing better, when the objective reaches
 a lower bound, or at the end of its budget (:mod:`.budget`), whichever comes first; unless a
-clock budget ends it, it is deterministic.
+clock budget ends it, it is deterministic.  The budget is checked before every evaluation, not
+only between moves: on a fleet of thousands of robots one round of moves can try thousands of
+schedules, and must not run past the time limit.
 """
 from __future__ import annotations
 
@@ -136,6 +138,17 @@ def evaluate(problem: AllocationProblem, chosen: Sequence[str], sequences: Mappi
     return _Evaluator(problem, chosen, objective)(sequences)
 
 
+@dataclass(frozen=True)
+class Improved:
+    """The best schedule the descent found, and whether its budget ended it (``cut``) rather
+    than a local optimum it could not leave, the lower bound or its own limits."""
+
+    teams: dict[str, tuple[str, ...]]
+    start: dict[str, int]
+    value: float
+    cut: bool = False
+
+
 def improve(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str, tuple[str, ...]],
             start: Mapping[str, int], objective: Objective, budget: Budget, seed: int = 0,
             floor: float | None = None) -> tuple[dict[str, tuple[str, ...]], dict[str, int], float]:
@@ -143,12 +156,22 @@ def improve(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[st
     ``chosen``, restarted from random kicks (``seed``) while the budget lasts and the objective
     is above ``floor`` (a lower bound: nothing better exists); returns the teams, start times
     and objective of the best schedule found."""
+    found = improve_schedule(problem, chosen, teams, start, objective, budget, seed, floor)
+    return found.teams, found.start, found.value
+
+
+def improve_schedule(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str, tuple[str, ...]],
+                     start: Mapping[str, int], objective: Objective, budget: Budget, seed: int = 0,
+                     floor: float | None = None) -> Improved:
+    """:func:`improve`, saying whether the budget cut it (the allocation reports it)."""
     running = budget.running()
     evaluator = _Evaluator(problem, chosen, objective)
-    sequences = robot_sequences(problem, chosen, teams, start)
+    # the busy robots only: an evaluation then costs the jobs, not the fleet (idle robots are
+    # reached through the moves, problem.first_idle)
+    sequences = {r: s for r, s in robot_sequences(problem, chosen, teams, start).items() if s}
     first = evaluator(sequences)
     if first is None:  # the start times contradict the precedences: not a schedule to improve
-        return dict(teams), dict(start), float("inf")
+        return Improved(dict(teams), dict(start), float("inf"))
     units = _units(problem, chosen, teams)
     stall = 0  # kicks since the last improvement
 
@@ -166,14 +189,15 @@ def improve(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[st
         trial, result = _descend(problem, evaluator, kicked, moved, units, left)
         if result.score < best.score:
             sequences, best, stall = trial, result, 0
-    return robot_teams(sequences, chosen), best.start, best.score[0]
+    cut = not running(evaluator.count * len(chosen)) and (floor is None or best.score[0] > floor)
+    return Improved(robot_teams(sequences, chosen), best.start, best.score[0], cut)
 
 
 def _descend(problem: AllocationProblem, evaluator: _Evaluator, sequences: Sequences, best: Evaluated,
              units: list[list[str]], left: Callable[[], bool]) -> tuple[Sequences, Evaluated]:
     """Better moves while there are some and the budget lasts."""
     while left():
-        found = _better_move(problem, evaluator, sequences, units, best)
+        found = _better_move(problem, evaluator, sequences, units, best, left)
         if found is None:
             break
         sequences, best = found
@@ -185,7 +209,7 @@ def _kick(problem: AllocationProblem, sequences: Sequences, units: list[list[str
     out = sequences
     for unit in rng.sample(units, min(KICK, len(units))):
         source = next(r for r, s in out.items() if unit[0] in s)
-        able = [r.name for r in problem.fleet.robots if all(r.name in problem.jobs[j].candidates for j in unit)]
+        able = problem.having(frozenset().union(*(problem.jobs[j].capabilities for j in unit)))
         order = {j: i for r in out for i, j in enumerate(out[r])}
         out = _relocate(problem, out, sorted(unit, key=order.__getitem__), source, rng.choice(able))
     return out
@@ -211,9 +235,9 @@ def _units(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str
 
 
 def _better_move(problem: AllocationProblem, evaluator: _Evaluator, sequences: Sequences, units: list[list[str]],
-                 best: Evaluated) -> tuple[Sequences, Evaluated] | None:
+                 best: Evaluated, left: Callable[[], bool]) -> tuple[Sequences, Evaluated] | None:
     """The first move that scores better than ``best``: each kind of :data:`MOVES` in turn, off
-    the robots that finish last first."""
+    the robots that finish last first; None also when the budget (``left``) ends first."""
     end = {j: best.start[j] + problem.jobs[j].duration for j in best.start}
     order = sorted((r for r in sequences if sequences[r]), key=lambda r: (-end[sequences[r][-1]], r))
     around = _Around(problem, sequences, units, best, end, evaluator.trip)
@@ -223,7 +247,7 @@ def _better_move(problem: AllocationProblem, evaluator: _Evaluator, sequences: S
                 result = evaluator(moved)
                 if result is not None and result.score < best.score:
                     return moved, result
-                if evaluator.count >= MAX_EVALUATIONS:
+                if not left():
                     return None
     return None
 
@@ -247,10 +271,11 @@ class _Around:
         return [sorted(u, key=lambda j: (self.best.start[j], j)) for u in mine]
 
     def able(self, robot: str, unit: list[str]) -> bool:
-        return all(robot in self.problem.jobs[j].candidates for j in unit)
+        return all(robot in self.problem.able(j) for j in unit)
 
     def finish(self, robot: str) -> int:
-        return self.end[self.sequences[robot][-1]] if self.sequences[robot] else 0
+        sequence = self.sequences.get(robot)
+        return self.end[sequence[-1]] if sequence else 0
 
     def work(self, robot: str, sequence: Sequence[str]) -> int:
         """What ``robot`` spends on ``sequence`` without waiting: its jobs and its trips."""
@@ -272,8 +297,9 @@ class _Around:
 
 def _relocations(around: _Around, robot: str) -> Iterator[Sequences]:
     """Each unit of ``robot`` to its own sequence again (reinserted) or to another able robot's,
-    the robots that finish first first."""
-    targets = sorted(around.sequences, key=lambda r: (r != robot, around.finish(r), r))
+    the robots that finish first first (of the idle ones, the first of each kind)."""
+    robots = list(around.sequences) + around.problem.first_idle(around.sequences)
+    targets = sorted(robots, key=lambda r: (r != robot, around.finish(r), r))
     for unit in around.units_of(robot):
         for target in targets:
             if around.able(target, unit):
@@ -328,10 +354,10 @@ MOVES: tuple[Move, ...] = (_relocations, _segment_moves, _reversals, _swaps)  # 
 def _relocate(problem: AllocationProblem, sequences: Sequences, unit: list[str], source: str, target: str) -> Sequences:
     """``sequences`` with ``unit`` taken off ``source`` and each of its jobs inserted, in order,
     where it adds the least travel to ``target``'s sequence."""
-    out = {r: list(s) for r, s in sequences.items()}
+    out = dict(sequences)  # the other robots' lists are shared, not copied: a fleet can be large
     out[source] = [j for j in out[source] if j not in unit]
     robot = problem.robots[target]
-    sequence = out[target]
+    sequence = out[target] = list(out.get(target, ()))
     earliest = 0
     for j in unit:
         place = problem.jobs[j].location

@@ -26,14 +26,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Iterable
 
 from ortools.sat.python import cp_model
 
 from ..solve.embedding import cp_literal
 from ..solve.native import cmh
 
-from .budget import Budget
+from .budget import NEVER, Budget, Deadline, OutOfTime
 from .fleet import Robot
 from .model import horizon, literal_value
 from .options import Objective
@@ -56,11 +56,15 @@ class LoadBound:
 def load_bound(problem: AllocationProblem, objective: Objective, budget: Budget, workers: int = 1,
                seed: int = 0) -> LoadBound:
     """Solve the relaxation (see the module docstring) within ``budget``: half of it for the
-    bound, the rest for the decomposition of least work among the best relaxed ones."""
+    bound, the rest for the decomposition of least work among the best relaxed ones.  A
+    relaxation whose building outlasts ``budget`` gives nothing (status ``MaxTime``)."""
     from ..solve.run import FEASIBLE, OPTIMAL
 
     started = time.perf_counter()
-    m, chosen, goal = _relaxation(problem, objective)
+    try:
+        m, chosen, goal = _relaxation(problem, objective, NEVER if budget.deterministic else budget.deadline())
+    except OutOfTime:
+        return LoadBound(None, "MaxTime", (), time.perf_counter() - started)
     response = _solve(m, budget.part(0.5), workers, seed)
     if response.status not in (OPTIMAL, FEASIBLE):  # infeasible: the search says why
         return LoadBound(None, response.status.name, (), time.perf_counter() - started)
@@ -79,10 +83,10 @@ def load_bound(problem: AllocationProblem, objective: Objective, budget: Budget,
     return LoadBound(bound, status, picked, time.perf_counter() - started)
 
 
-def _relaxation(problem: AllocationProblem, objective: Objective
+def _relaxation(problem: AllocationProblem, objective: Objective, deadline: Deadline = NEVER
                 ) -> tuple[cp_model.CpModel, dict[str, Any], cp_model.LinearExpr]:
     """The relaxed model on a copy of the decomposition model, the literals of the jobs and the
-    relaxed objective."""
+    relaxed objective; :class:`~.budget.OutOfTime` when the ``deadline`` passes first."""
     m = problem.dm.model.clone()
     chosen = {d: cp_literal(m, problem.dm.decomposition[d].index) for d in problem.jobs}
     for d in problem.dm.decomposition:
@@ -91,10 +95,11 @@ def _relaxation(problem: AllocationProblem, objective: Objective
     _shared_robots(m, problem, chosen)
     longest = horizon(problem)  # the joint model's: every schedule of it fits, so the bound stays one
     makespan = m.new_int_var(0, longest, "load_makespan")
-    ways = ways_in(problem)
-    _pools(m, problem, chosen, ways, makespan)
+    ways = ways_in(problem, deadline)
+    _pools(m, problem, chosen, ways, makespan, deadline)
+    deadline.check()
     _chains(m, problem, chosen, makespan, longest)
-    travel = _visits(m, problem, chosen, ways, list(problem.fleet.robots), "all")
+    travel = _visits(m, problem, chosen, _distinct(problem.fleet.robots, ways, deadline), "all")
     goal = objective.makespan_weight * makespan + objective.travel_weight * travel
     m.minimize(goal)
     return m, chosen, goal
@@ -118,22 +123,24 @@ def linked_candidates(problem: AllocationProblem) -> dict[str, dict[str, frozens
     out: dict[str, dict[str, frozenset[str]]] = {}
     for first, second in problem.same_robots:
         a, b = problem.jobs[first], problem.jobs[second]
-        both = frozenset(a.candidates) & frozenset(b.candidates)
+        both = problem.able(first) & problem.able(second)
         for job, partner in ((a, b), (b, a)):
-            if both and both < frozenset(job.candidates):
+            if both and both < problem.able(job.id):
                 out.setdefault(job.id, {})[partner.id] = both
     return out
 
 
-def pools(problem: AllocationProblem, linked: dict[str, dict[str, frozenset[str]]]) -> list[frozenset[str]]:
+def pools(problem: AllocationProblem, linked: dict[str, dict[str, frozenset[str]]],
+          deadline: Deadline = NEVER) -> list[frozenset[str]]:
     """The candidate sets of the jobs, alone and with the jobs they must share robots with
     (``linked``: :func:`linked_candidates`), and, while there are few, their unions (in a fixed
     order)."""
     together = {s for partners in linked.values() for s in partners.values()}
-    found = sorted({frozenset(j.candidates) for j in problem.jobs.values() if j.candidates} | together, key=sorted)
+    found = sorted({problem.able(j) for j in problem.jobs if problem.jobs[j].candidates} | together, key=sorted)
     closed = set(found)
     frontier = list(found)
     while frontier and len(closed) < MAX_POOLS:
+        deadline.check()
         grown = [a | b for a in frontier for b in found if not b <= a]
         frontier = sorted({s for s in grown if s not in closed}, key=sorted)[:MAX_POOLS - len(closed)]
         closed.update(frontier)
@@ -141,18 +148,19 @@ def pools(problem: AllocationProblem, linked: dict[str, dict[str, frozenset[str]
 
 
 def _pools(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, Any],
-           ways: dict[str, dict[str, int]], makespan: cp_model.IntVar) -> None:
+           ways: dict[str, dict[str, int]], makespan: cp_model.IntVar, deadline: Deadline = NEVER) -> None:
     """Each pool's work and ways in fit in ``|S| * makespan``."""
     robots = problem.robots
     linked = linked_candidates(problem)
     members = _PoolMembers(m, problem, chosen, linked)
-    for number, pool in enumerate(pools(problem, linked)):
+    for number, pool in enumerate(pools(problem, linked, deadline)):
+        deadline.check()
         inside = members.of(pool, number)
         if not inside:
             continue
         work = cp_model.LinearExpr.weighted_sum(
             list(inside.values()), [problem.jobs[d].duration * problem.jobs[d].robots.min for d in inside])
-        entered = _visits(m, problem, inside, ways, [robots[r] for r in sorted(pool)], f"pool{number}",
+        entered = _visits(m, problem, inside, _distinct((robots[r] for r in pool), ways, deadline), f"pool{number}",
                           [problem.jobs[d] for d in inside])
         m.add(work + entered <= len(pool) * makespan)
 
@@ -174,7 +182,7 @@ class _PoolMembers:
         """Job id -> the literal that puts its work in ``pool``."""
         inside: dict[str, Any] = {}
         for job in self.problem.jobs.values():
-            if job.candidates and set(job.candidates) <= pool:
+            if job.candidates and self.problem.able(job.id) <= pool:
                 inside[job.id] = self.chosen[job.id]
                 continue
             pairs = [self._both(job.id, e) for e, both in self.linked.get(job.id, {}).items() if both <= pool]
@@ -195,18 +203,35 @@ class _PoolMembers:
         return self.together[key]
 
 
+def _distinct(members: Iterable[Robot], ways: dict[str, dict[str, int]], deadline: Deadline = NEVER
+              ) -> list[dict[str, int]]:
+    """The ways in of ``members`` (:func:`ways_in`), each table once: robots of one kind share
+    theirs, so a pool of thousands of robots has a few.  A robot without a start has none (an
+    empty table: every place is free to it)."""
+    out: dict[int, dict[str, int]] = {}
+    for number, robot in enumerate(members):
+        if number % 4096 == 0:
+            deadline.check()
+        table = ways.get(robot.name, NO_WAYS)
+        out.setdefault(id(table), table)
+    return list(out.values())
+
+
+NO_WAYS: dict[str, int] = {}  # the ways in of a robot without a start: none cost anything
+
+
 def _visits(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, Any],
-            ways: dict[str, dict[str, int]], members: list[Robot], name: str,
-            jobs: list[Job] | None = None) -> cp_model.LinearExpr:
-    """The cheapest ways in, for ``members``, to the places of ``jobs`` (default: every job) that
-    are chosen (0 when one of them has no start)."""
+            tables: list[dict[str, int]], name: str, jobs: list[Job] | None = None) -> cp_model.LinearExpr:
+    """The cheapest ways in, for the robots whose ways in are ``tables`` (:func:`_distinct`), to
+    the places of ``jobs`` (default: every job) that are chosen (0 when one of them has no
+    start)."""
     at: dict[str, list[str]] = {}
     for job in jobs if jobs is not None else problem.jobs.values():
         if job.location is not None:
             at.setdefault(job.location, []).append(job.id)
     costs, visits = [], []
     for place in sorted(at):
-        cost = min((ways.get(r.name, {}).get(place, 0) for r in members), default=0)
+        cost = min((table.get(place, 0) for table in tables), default=0)
         if cost == 0:
             continue
         visit = m.new_bool_var(f"visit[{name},{place}]")
@@ -217,30 +242,40 @@ def _visits(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, A
     return cp_model.LinearExpr.weighted_sum(visits, costs)
 
 
-def ways_in(problem: AllocationProblem) -> dict[str, dict[str, int]]:
+def ways_in(problem: AllocationProblem, deadline: Deadline = NEVER) -> dict[str, dict[str, int]]:
     """For each robot with a start, the shortest trip into each place: from its start or from a
     place where it could have worked before (0 at its start).  A robot without a start reaches
-    its first place for free and is left out."""
+    its first place for free and is left out.  Robots of one kind (start, speed and
+    capabilities, hence the same jobs) share one answer, computed once: a fleet of thousands is
+    a few kinds.  Raises :class:`~.budget.OutOfTime` when the ``deadline`` passes first."""
     import numpy as np
 
     places = list(problem.travel.places)
     index = {p: i for i, p in enumerate(places)}
     distance = np.array(problem.travel.base, dtype=float).reshape(len(places), len(places))
+    np.fill_diagonal(distance, np.inf)  # a way in comes from another place
+    located: dict[frozenset[str], set[str]] = {}  # capabilities -> the places of the jobs they can do
+    answers: dict[tuple[str, float, frozenset[str]], dict[str, int]] = {}
     out: dict[str, dict[str, int]] = {}
-    for robot in problem.fleet.robots:
+    for number, robot in enumerate(problem.fleet.robots):
+        if number % 4096 == 0:
+            deadline.check()
         if robot.start is None:
             continue
-        if not problem.travel.modelled:
-            out[robot.name] = dict.fromkeys(places, 0)
-            continue
-        trips = np.ceil(distance / robot.speed - 1e-9)
-        np.fill_diagonal(trips, np.inf)  # a way in comes from another place
-        sources = {robot.start} | {j.location for j in problem.jobs.values()
-                                   if j.location is not None and robot.name in j.candidates}
-        rows = trips[sorted(index[s] for s in sources)]
-        cheapest = rows.min(axis=0)
-        cheapest[index[robot.start]] = 0
-        out[robot.name] = {p: int(cheapest[index[p]]) if np.isfinite(cheapest[index[p]]) else 0 for p in places}
+        kind = (robot.start, robot.speed, robot.capabilities)
+        if kind not in answers:
+            deadline.check()
+            if not problem.travel.modelled:
+                answers[kind] = dict.fromkeys(places, 0)
+            else:
+                if robot.capabilities not in located:
+                    located[robot.capabilities] = {j.location for j in problem.jobs.values() if j.location is not None
+                                                   and j.capabilities <= robot.capabilities}
+                sources = sorted(index[s] for s in located[robot.capabilities] | {robot.start})
+                cheapest = np.ceil(distance[sources] / robot.speed - 1e-9).min(axis=0)
+                cheapest[index[robot.start]] = 0
+                answers[kind] = {p: int(cheapest[i]) if np.isfinite(cheapest[i]) else 0 for i, p in enumerate(places)}
+        out[robot.name] = answers[kind]
     return out
 
 
@@ -249,7 +284,7 @@ def _shared_robots(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict
     both."""
     for first, second in problem.same_robots:
         a, b = problem.jobs[first], problem.jobs[second]
-        if len(set(a.candidates) & set(b.candidates)) < max(a.robots.min, b.robots.min):
+        if len(problem.able(first) & problem.able(second)) < max(a.robots.min, b.robots.min):
             m.add_bool_or([chosen[first].Not(), chosen[second].Not()])
 
 
@@ -274,8 +309,11 @@ def _chains(m: cp_model.CpModel, problem: AllocationProblem, chosen: dict[str, A
 def carry_time(problem: AllocationProblem, first: str, second: str) -> int:
     """The quickest trip from ``first``'s place to ``second``'s of a robot able to do both: the
     least time between them when the same robots do both (the trip times keep the triangle
-    inequality, so a detour through other places is never quicker)."""
+    inequality, so a detour through other places is never quicker).  Between two given places
+    the fastest robot is the quickest."""
     a, b = problem.jobs[first], problem.jobs[second]
-    robots = problem.robots
-    return min((problem.time(robots[r], a.location, b.location) for r in a.candidates if r in b.candidates),
-               default=0)
+    both = problem.able(second)
+    able = [problem.robots[r] for r in a.candidates if r in both]
+    if not able:
+        return 0
+    return problem.time(max(able, key=lambda r: r.speed), a.location, b.location)

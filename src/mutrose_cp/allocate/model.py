@@ -31,6 +31,7 @@ from graphlib import CycleError, TopologicalSorter
 from ortools.sat.python import cp_model
 
 from ..solve.proto import negated
+from .budget import NEVER, Deadline
 from .fleet import Robot
 from .neighbourhood import Restriction
 from .options import Objective
@@ -69,43 +70,68 @@ class AllocationModel:
 
 def horizon(problem: AllocationProblem) -> int:
     """A time by which some schedule surely ends: every job one after the other, each after
-    the longest trip."""
-    longest = max((problem.time(r, a, b) for r in problem.fleet.robots for a in problem.travel.places
-                   for b in problem.travel.places), default=0)
+    the longest trip (the slowest robot's over the longest distance: a trip's time grows with
+    its distance and falls with the speed, so no pass over robots and pairs of places)."""
+    travel = problem.travel
+    longest = 0
+    if travel.modelled and travel.base and problem.fleet.robots:
+        slowest = min(problem.fleet.robots, key=lambda r: r.speed)
+        far = max(range(len(travel.places)), key=lambda i: max(travel.base[i]))
+        to = max(range(len(travel.places)), key=lambda k: travel.base[far][k])
+        longest = problem.time(slowest, travel.places[far], travel.places[to])
     return sum(j.duration + longest for j in problem.jobs.values()) + longest + 1
 
 
 def build_model(problem: AllocationProblem, objective: Objective,
-                restriction: Restriction = Restriction()) -> AllocationModel:
+                restriction: Restriction = Restriction(), deadline: Deadline = NEVER) -> AllocationModel:
     """Add the allocation to ``problem.dm.model`` and set ``objective`` (see the module
     docstring), within ``restriction`` (large missions, ``neighbourhood.py``).  A job with
-    fewer able robots than it needs is excluded."""
+    fewer able robots than it needs is excluded.  Raises :class:`~.budget.OutOfTime` when the
+    ``deadline`` passes first (``problem.dm.model`` is then left half built: it serves no
+    search)."""
     dm = problem.dm
     am = AllocationModel(problem, dm.model, horizon(problem), restriction)
     for job in problem.jobs.values():
+        deadline.check()
         _add_job(am, job)
     m = am.model
     for first, second in problem.precedences:
         m.add(am.end[first] <= am.start[second])
     for first, second in problem.same_robots:
+        deadline.check()
         both = [dm.decomposition[first], dm.decomposition[second]]
-        robots = set(problem.jobs[first].candidates) | set(problem.jobs[second].candidates)
+        # a robot kept for neither job is assigned to neither: nothing to equate
+        robots = set(restriction.robots_of(problem, first)) | set(restriction.robots_of(problem, second))
         for name in sorted(robots):
             m.add(am.assign.get((first, name), dm.false) == am.assign.get((second, name), dm.false)
                   ).only_enforce_if(both)
     ruled_out = _ruled_out_arcs(problem)
+    mine = _jobs_by_robot(am)
     for robot in problem.fleet.robots:
-        _add_robot(am, robot, ruled_out)
+        if robot.name in mine:  # a robot without any job has no route, no work and no travel
+            deadline.check()
+            _add_robot(am, robot, mine[robot.name], ruled_out)
     am.makespan = m.new_int_var(0, am.horizon, "makespan")
     m.add_max_equality(am.makespan, list(am.end.values()))
     total_travel = cp_model.LinearExpr.sum(list(am.travel.values()))
     if objective.makespan_weight:
         for robot in problem.fleet.robots:
-            mine = [(a, problem.jobs[j].duration) for (j, r), a in am.assign.items() if r == robot.name]
-            work = cp_model.LinearExpr.weighted_sum([a for a, _ in mine], [d for _, d in mine])
-            m.add(cp_model.LinearExpr.sum([work, am.travel[robot.name]]) <= am.makespan)
+            jobs = mine.get(robot.name, [])
+            if jobs:
+                work = cp_model.LinearExpr.weighted_sum([am.assign[(j.id, robot.name)] for j in jobs],
+                                                        [j.duration for j in jobs])
+                m.add(cp_model.LinearExpr.sum([work, am.travel[robot.name]]) <= am.makespan)
     m.minimize(objective.makespan_weight * am.makespan + objective.travel_weight * total_travel)
     return am
+
+
+def _jobs_by_robot(am: AllocationModel) -> dict[str, list[Job]]:
+    """Each robot's jobs (those it may be assigned), in job order: one pass over the
+    assignments rather than one per robot."""
+    out: dict[str, list[Job]] = {}
+    for (j, r) in am.assign:
+        out.setdefault(r, []).append(am.problem.jobs[j])
+    return out
 
 
 def _add_job(am: AllocationModel, job: Job) -> None:
@@ -128,10 +154,9 @@ def _add_job(am: AllocationModel, job: Job) -> None:
     m.add(sum(team) <= job.robots.max)
 
 
-def _add_robot(am: AllocationModel, robot: Robot, ruled_out: set[tuple[str, str]]) -> None:
-    """The robot's intervals, and its route when it travels."""
+def _add_robot(am: AllocationModel, robot: Robot, jobs: list[Job], ruled_out: set[tuple[str, str]]) -> None:
+    """The robot's intervals (``jobs``: those it may be assigned), and its route when it travels."""
     m, problem = am.model, am.problem
-    jobs = [problem.jobs[j] for j in problem.jobs if (j, robot.name) in am.assign]
     intervals = [m.new_optional_fixed_size_interval_var(am.start[j.id], j.duration, am.assign[(j.id, robot.name)],
                                                         f"busy[{j.id},{robot.name}]") for j in jobs]
     located = [j for j in jobs if j.location is not None]

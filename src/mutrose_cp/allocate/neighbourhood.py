@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .budget import NEVER, Deadline
 from .problem import AllocationProblem
 
 CANDIDATE_BUDGET = 6_000  # (job, robot) pairs
@@ -44,39 +45,58 @@ class Restriction:
 
 
 def restrict(problem: AllocationProblem, keep_teams: dict[str, tuple[str, ...]] | None = None,
-             keep_arcs: set[tuple[str, str]] | None = None) -> Restriction:
+             keep_arcs: set[tuple[str, str]] | None = None, deadline: Deadline = NEVER) -> Restriction:
     """The restriction for ``problem`` (none when it is small enough), keeping the warm start's
-    teams and route arcs."""
-    candidates = _near_robots(problem, keep_teams or {})
+    teams and route arcs; :class:`~.budget.OutOfTime` when the ``deadline`` passes first."""
+    candidates = _near_robots(problem, keep_teams or {}, deadline)
+    per_robot = _located_jobs_per_robot(problem, candidates)
+    arcs = sum(n * n for n in per_robot.values())
+    predecessors = None
+    if arcs > ARC_BUDGET:
+        nodes = sum(per_robot.values())
+        predecessors = _near_predecessors(problem, max(3, ARC_BUDGET // max(nodes, 1)), keep_arcs or set(), deadline)
+    return Restriction(candidates, predecessors)
+
+
+def is_large(problem: AllocationProblem) -> bool:
+    """Whether :func:`restrict` restricts ``problem``, without building the restriction (the
+    allocation shares its time limit by it before the warm start)."""
+    if sum(len(j.candidates) for j in problem.jobs.values()) > CANDIDATE_BUDGET:
+        return True
+    return sum(n * n for n in _located_jobs_per_robot(problem, None).values()) > ARC_BUDGET
+
+
+def _located_jobs_per_robot(problem: AllocationProblem, candidates: dict[str, tuple[str, ...]] | None
+                            ) -> dict[str, int]:
     per_robot: dict[str, int] = {}
     for job in problem.jobs.values():
         if job.location is None:
             continue
         for r in (job.candidates if candidates is None else candidates[job.id]):
             per_robot[r] = per_robot.get(r, 0) + 1
-    arcs = sum(n * n for n in per_robot.values())
-    predecessors = None
-    if arcs > ARC_BUDGET:
-        nodes = sum(per_robot.values())
-        predecessors = _near_predecessors(problem, max(3, ARC_BUDGET // max(nodes, 1)), keep_arcs or set())
-    return Restriction(candidates, predecessors)
+    return per_robot
 
 
-def _near_robots(problem: AllocationProblem, keep: dict[str, tuple[str, ...]]) -> dict[str, tuple[str, ...]] | None:
+def _near_robots(problem: AllocationProblem, keep: dict[str, tuple[str, ...]],
+                 deadline: Deadline) -> dict[str, tuple[str, ...]] | None:
+    """For each job, the robots that can be there first from their start (ties by name), and
+    the warm start's, in fleet order."""
     pairs = sum(len(j.candidates) for j in problem.jobs.values())
     if pairs <= CANDIDATE_BUDGET:
         return None
     per_job = max(3, CANDIDATE_BUDGET // len(problem.jobs))
-    robots = problem.robots
+    index = problem.index
     out = {}
     for job in problem.jobs.values():
-        near = sorted(job.candidates, key=lambda r: (problem.time(robots[r], robots[r].start, job.location), r))
-        kept = set(near[:max(per_job, job.robots.max)]) | set(keep.get(job.id, ()))
-        out[job.id] = tuple(r for r in job.candidates if r in kept)
+        deadline.check()
+        near = problem.nearest(job.candidates, job.location, max(per_job, job.robots.max), deadline=deadline)
+        kept = set(near) | set(keep.get(job.id, ()))
+        out[job.id] = tuple(sorted(kept, key=index.__getitem__))
     return out
 
 
-def _near_predecessors(problem: AllocationProblem, k: int, keep: set[tuple[str, str]]) -> dict[str, set[str]]:
+def _near_predecessors(problem: AllocationProblem, k: int, keep: set[tuple[str, str]],
+                       deadline: Deadline = NEVER) -> dict[str, set[str]]:
     """For each job, the jobs at the places nearest to it (its own first) until ``k`` are
     found, and the warm start's predecessor; every job without a place is kept."""
     at: dict[str, list[str]] = {}
@@ -89,6 +109,7 @@ def _near_predecessors(problem: AllocationProblem, k: int, keep: set[tuple[str, 
     unit = problem.fleet.robots[0]
     nearest: dict[str, list[str]] = {}
     for place in at:
+        deadline.check()
         order = sorted(at, key=lambda p: (problem.travel.time(unit, p, place), p))
         found: list[str] = []
         for p in order:

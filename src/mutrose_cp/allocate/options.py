@@ -49,7 +49,8 @@ class Objective:
 @dataclass(frozen=True)
 class AllocationOptions:
     """What to minimise and how long the allocation takes (``time_limit``: bounds, model and
-    search together, see :mod:`.allocation`).
+    search together, see :mod:`.allocation` and :mod:`.phases`; counted from ``counted_from``
+    when given, the command's start on the command line).
 
     CP-SAT runs with ``seed`` and ``workers`` threads (its portfolio, large-neighbourhood
     search included, from 2 on).  A search that ends before ``time_limit`` with one worker
@@ -64,6 +65,9 @@ class AllocationOptions:
     lp_bound: bool = True  # also compute the LP bound with Clarabel
     warm_start: bool = True  # give CP-SAT a first schedule (decomposition-first) as a hint
     work_limit: float | None = None  # units of deterministic work instead of time_limit seconds
+    # time.perf_counter() when the time limit started counting (None: when the allocation starts);
+    # the command line starts it with the command, so that reading a large fleet counts too
+    counted_from: float | None = None
 
     @property
     def budget(self) -> Budget:

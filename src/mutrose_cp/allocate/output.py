@@ -16,6 +16,10 @@ from typing import Any
 from ..output import OutputModel, write_output
 from ..output_file import atomic_writer
 from .allocation import Allocation
+from .phases import CUT, SKIPPED
+
+PHASE_NAMES = {"problem": "problem", "load": "load bound", "warm": "warm start", "lp": "LP bound", "model": "model",
+               "search": "search"}
 
 SCHEDULE_FORMAT = "mutrose-cp schedule 1"
 
@@ -68,6 +72,14 @@ def schedule_document(allocation: Allocation) -> dict[str, Any]:
             "travel": schedule.travel, "robots": robots, "tasks": tasks}
 
 
+def phases_section(allocation: Allocation) -> list[dict[str, Any]]:
+    """The phases of the run as ``--json-summary`` lists them: each with its status (done, cut,
+    skipped or off), its seconds and, when there is more to say, why.  Not in the schedule file,
+    which holds no clock time."""
+    return [{"phase": p.name, "status": p.status, "seconds": round(p.seconds, 3), **({"note": p.note} if p.note else {})}
+            for p in allocation.phases]
+
+
 def write_schedule(allocation: Allocation, path: str | os.PathLike[str]) -> None:
     """Write the schedule file atomically."""
     text = json.dumps(schedule_document(allocation), indent=2, ensure_ascii=False) + "\n"
@@ -104,7 +116,17 @@ def summary_line(allocation: Allocation) -> str:
         value += f", makespan {schedule.makespan}"
     if kind != "travel":
         value += f", travel {schedule.travel}"
-    return f"allocated: {value}, {len(schedule.jobs)} tasks on {busy} of {len(schedule.routes)} robots{_bounds(allocation)}"
+    return (f"allocated: {value}, {len(schedule.jobs)} tasks on {busy} of {len(schedule.routes)} robots"
+            f"{_bounds(allocation)}{_short_phases(allocation)}")
+
+
+def _short_phases(allocation: Allocation) -> str:
+    """``; cut by the limit: LP bound; skipped: search (no time left)``: the phases that did not
+    run to their end (a search cut by the limit is said so above), so that a fleet too large for
+    the limit says so."""
+    cut = [PHASE_NAMES.get(p.name, p.name) for p in allocation.phases if p.status == CUT and p.name != "search"]
+    skipped = [f"{PHASE_NAMES.get(p.name, p.name)} ({p.note})" for p in allocation.phases if p.status == SKIPPED]
+    return (f"; cut by the limit: {', '.join(cut)}" if cut else "") + (f"; skipped: {', '.join(skipped)}" if skipped else "")
 
 
 def _bounds(allocation: Allocation) -> str:

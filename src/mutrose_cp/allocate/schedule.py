@@ -77,14 +77,27 @@ def compact(problem: AllocationProblem, jobs: Sequence[str], teams: Mapping[str,
 
 def robot_sequences(problem: AllocationProblem, chosen: Sequence[str], teams: Mapping[str, tuple[str, ...]],
                     start: Mapping[str, int]) -> dict[str, list[str]]:
-    """Each robot's jobs of ``chosen`` in the order it starts them (ties by job id)."""
-    return {r.name: sorted((j for j in chosen if r.name in teams[j]), key=lambda j: (start[j], j))
-            for r in problem.fleet.robots}
+    """Each robot's jobs of ``chosen`` in the order it starts them (ties by job id).  Read from
+    the teams, so that a large fleet costs one pass, not one per job."""
+    out: dict[str, list[str]] = {r.name: [] for r in problem.fleet.robots}
+    for j in chosen:
+        for r in teams[j]:
+            out[r].append(j)
+    for jobs in out.values():
+        if len(jobs) > 1:
+            jobs.sort(key=lambda j: (start[j], j))
+    return out
 
 
 def robot_teams(sequences: Mapping[str, Sequence[str]], chosen: Sequence[str]) -> dict[str, tuple[str, ...]]:
-    """The robots of each job of ``chosen``, from each robot's sequence of jobs."""
-    return {j: tuple(r for r in sequences if j in sequences[r]) for j in chosen}
+    """The robots of each job of ``chosen``, from each robot's sequence of jobs (robots in the
+    order of ``sequences``)."""
+    teams: dict[str, list[str]] = {j: [] for j in chosen}
+    for r, sequence in sequences.items():
+        for j in sequence:
+            if j in teams:
+                teams[j].append(r)
+    return {j: tuple(robots) for j, robots in teams.items()}
 
 
 def chosen_predecessors(problem: AllocationProblem, chosen: set[str]) -> dict[str, list[str]]:

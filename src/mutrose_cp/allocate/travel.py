@@ -18,13 +18,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Iterable, Mapping
+from typing import TYPE_CHECKING, Iterable, Mapping
 
 from lxml import etree
 
 from ..errors import MissionError, Problem, located
-from ..mission import Mission
+from ..pipeline.stages import MissionStages
+from .budget import NEVER, Deadline
 from .fleet import MAX_COORDINATE, Fleet, Robot
+
+if TYPE_CHECKING:
+    import numpy as np
 
 COORDINATE_FIELDS = ("x", "y")
 
@@ -38,7 +42,7 @@ class Place:
     where: str  # the world record or the fleet entry, for messages
 
 
-def world_places(mission: Mission) -> tuple[dict[str, Place], list[Problem]]:
+def world_places(mission: MissionStages) -> tuple[dict[str, Place], list[Problem]]:
     """The world's locations with the coordinates of their ``x``/``y`` fields, and the problems
     of fields that are not numbers or come alone."""
     knowledge = mission.knowledge
@@ -104,20 +108,25 @@ class TravelTimes:
         distance = self.base[self._position[a]][self._position[b]]
         return math.ceil(distance / robot.speed - 1e-9)
 
-    def among(self, places: Iterable[str]) -> TravelTimes:
+    def among(self, places: Iterable[str], deadline: Deadline = NEVER) -> TravelTimes:
         """The times between ``places`` alone (a subset of :attr:`places`): the table of the
-        mission's places, checked once, serves an allocation that needs only some of them."""
+        mission's places, checked once, serves an allocation that needs only some of them.
+        Raises :class:`~.budget.OutOfTime` when the ``deadline`` passes first."""
         kept = sorted(set(places))
-        rows = [self.base[self._position[p]] for p in kept]
-        return TravelTimes(tuple(kept), tuple(tuple(row[self._position[p]] for p in kept) for row in rows),
-                           self.modelled)
+        columns = [self._position[p] for p in kept]
+        rows = []
+        for p in kept:
+            deadline.check()
+            row = self.base[self._position[p]]
+            rows.append(tuple(row[c] for c in columns))
+        return TravelTimes(tuple(kept), tuple(rows), self.modelled)
 
     @cached_property
     def _position(self) -> dict[str, int]:
         return {p: i for i, p in enumerate(self.places)}
 
 
-def build_travel(mission: Mission, fleet: Fleet, needed: Iterable[str]) -> TravelTimes:
+def build_travel(mission: MissionStages, fleet: Fleet, needed: Iterable[str]) -> TravelTimes:
     """Travel times between the ``needed`` places (task locations and robot starts).
     Raises :class:`MissionError` naming each place a time is missing for."""
     wanted = sorted(set(needed))
@@ -129,58 +138,78 @@ def build_travel(mission: Mission, fleet: Fleet, needed: Iterable[str]) -> Trave
     table = fleet.travel.times
     if not table and not any(p.point is not None for p in places.values()):
         return TravelTimes(tuple(wanted), tuple(tuple(0.0 for _ in wanted) for _ in wanted), False)
-    names = sorted(set(wanted) | {a for pair in table for a in pair})
-    direct = [[_direct(a, b, places, table, fleet.travel.metric) for b in names] for a in names]
-    if table:
-        direct = _shortest_paths(direct)
-    position = {p: i for i, p in enumerate(names)}
-    _check_complete(wanted, direct, position, places, fleet)
-    base = tuple(tuple(direct[position[a]][position[b]] for b in wanted) for a in wanted)
-    return TravelTimes(tuple(wanted), base, True)
+    if table:  # NumPy and SciPy imported below: reading and checking a fleet without travel stays light
+        times = _shortest_paths(wanted, places, table, fleet.travel.metric)
+    else:
+        times = _distances(wanted, places, fleet.travel.metric)
+    _check_complete(wanted, times, places, fleet)
+    return TravelTimes(tuple(wanted), tuple(map(tuple, times.tolist())), True)
 
 
-def _direct(a: str, b: str, places: dict[str, Place], table: Mapping[tuple[str, str], float],
-            metric: str) -> float:
-    if a == b:
-        return 0.0
-    if (a, b) in table:
-        return float(table[(a, b)])
-    if (b, a) in table:
-        return float(table[(b, a)])
-    pa, pb = places.get(a), places.get(b)
-    if pa is None or pb is None or pa.point is None or pb.point is None:
-        return math.inf
-    dx, dy = pa.point[0] - pb.point[0], pa.point[1] - pb.point[1]
-    return abs(dx) + abs(dy) if metric == "manhattan" else math.hypot(dx, dy)
-
-
-def _shortest_paths(direct: list[list[float]]) -> list[list[float]]:
-    """Shortest paths through the table and the coordinates (SciPy's Floyd-Warshall; an
-    infinite entry is a missing edge, a zero one an edge of length 0)."""
+def _distances(names: list[str], places: dict[str, Place], metric: str) -> np.ndarray:
+    """The distance between the coordinates of each two of ``names`` (infinite where one has
+    none; 0 from a place to itself), in arrays."""
     import numpy as np
-    from scipy.sparse.csgraph import csgraph_from_dense, floyd_warshall  # type: ignore[import-untyped]
 
-    graph = csgraph_from_dense(np.array(direct, dtype=float), null_value=np.inf)
-    return [[float(v) for v in row] for row in floyd_warshall(graph, directed=True)]
+    points = np.full((len(names), 2), np.nan)
+    for i, name in enumerate(names):
+        place = places.get(name)
+        if place is not None and place.point is not None:
+            points[i] = place.point
+    dx = points[:, None, 0] - points[None, :, 0]
+    dy = points[:, None, 1] - points[None, :, 1]
+    distance = np.abs(dx) + np.abs(dy) if metric == "manhattan" else np.hypot(dx, dy)
+    distance[np.isnan(distance)] = np.inf
+    np.fill_diagonal(distance, 0.0)
+    return distance
 
 
-def _check_complete(wanted: list[str], direct: list[list[float]], position: dict[str, int],
-                    places: dict[str, Place], fleet: Fleet) -> None:
+def _shortest_paths(wanted: list[str], places: dict[str, Place], table: Mapping[tuple[str, str], float],
+                    metric: str) -> np.ndarray:
+    """The quickest trips between the ``wanted`` places through the road network: the table's
+    entries (both ways, unless the reverse has its own) and the straight lines between places
+    with coordinates, where no entry replaces them.  Dijkstra from each wanted place on the
+    sparse network (SciPy): a network of thousands of junctions costs its roads, not the cube
+    of its junctions."""
+    import numpy as np
+    from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
+    from scipy.sparse.csgraph import dijkstra  # type: ignore[import-untyped]
+
+    names = sorted(set(wanted) | {a for pair in table for a in pair})
+    position = {p: i for i, p in enumerate(names)}
+    roads = {(position[a], position[b]): t for (a, b), t in table.items() if a != b}
+    roads.update({(b, a): t for (a, b), t in list(roads.items()) if (b, a) not in roads})
+    pointed = [i for i, name in enumerate(names) if (place := places.get(name)) is not None and place.point is not None]
+    block = _distances([names[i] for i in pointed], places, metric)
+    at = np.asarray(pointed, dtype=np.int64)
+    source, target = np.meshgrid(at, at, indexing="ij")
+    keep = source != target
+    if roads:  # a table entry wins over the straight line
+        keys = np.fromiter((i * len(names) + j for i, j in roads), dtype=np.int64, count=len(roads))
+        keep &= ~np.isin(source * len(names) + target, keys)
+    rows = np.concatenate([source[keep], np.fromiter((i for i, _ in roads), dtype=np.int64, count=len(roads))])
+    columns = np.concatenate([target[keep], np.fromiter((j for _, j in roads), dtype=np.int64, count=len(roads))])
+    lengths = np.concatenate([block[keep], np.fromiter(roads.values(), dtype=float, count=len(roads))])
+    graph = csr_matrix((lengths, (rows, columns)), shape=(len(names), len(names)))  # zeros stay roads of length 0
+    indices = [position[p] for p in wanted]
+    return np.asarray(dijkstra(graph, directed=True, indices=indices), dtype=float)[:, indices]
+
+
+def _check_complete(wanted: list[str], times: np.ndarray, places: dict[str, Place], fleet: Fleet) -> None:
     """Every trip between two wanted places has a time; otherwise each place that misses
     coordinates is named once, where it is defined."""
+    import numpy as np
+
     problems: list[Problem] = []
-    reported: set[str] = set()
-    for a in wanted:
-        for b in wanted:
-            if math.isfinite(direct[position[a]][position[b]]) or a in reported:
-                continue
-            reported.add(a)
-            place = places.get(a)
-            where = place.where if place is not None else fleet.source
-            known = "" if place is None else " has no coordinates and"
-            problems.append(Problem(where, f"place {a}{known or ' is not a world location and has no coordinates, and'} "
-                                           f"no travel time to {b}",
-                                    "Give it x and y fields in the world, or travel.coordinates or a travel.times "
-                                    "entry in the fleet."))
+    for i in np.flatnonzero(~np.isfinite(times).all(axis=1)):
+        a = wanted[i]
+        b = wanted[int(np.flatnonzero(~np.isfinite(times[i]))[0])]
+        place = places.get(a)
+        where = place.where if place is not None else fleet.source
+        known = "" if place is None else " has no coordinates and"
+        problems.append(Problem(where, f"place {a}{known or ' is not a world location and has no coordinates, and'} "
+                                       f"no travel time to {b}",
+                                "Give it x and y fields in the world, or travel.coordinates or a travel.times "
+                                "entry in the fleet."))
     if problems:
         raise MissionError(problems)

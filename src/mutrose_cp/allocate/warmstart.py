@@ -25,16 +25,19 @@ from graphlib import TopologicalSorter
 from typing import Sequence
 
 from ..errors import MissionError
-from ..solve.decompose import DecompositionRequest
+from ..solve.decompose import DecompositionRequest, decompose
 from ..solve.optimize import CostModel
-from .budget import Budget
-from .improve import improve
+from ..solve.run import IncompleteSolveError
+from .budget import NEVER, Budget, Deadline, OutOfTime
+from .improve import improve_schedule
 from .model import START, AllocationModel
 from .options import Objective
 from .problem import AllocationProblem
 from .schedule import Schedule, chosen_predecessors, compact, robot_sequences
 
 Plan = tuple[dict[str, tuple[str, ...]], dict[str, int]]  # teams and start times of the chosen jobs
+MIN_IMPROVEMENT = 0.01  # seconds: a clock budget below this leaves the list schedule unimproved
+MOVES_SHARE = 0.9  # of the budget, for the local moves: the rest is kept for the hint's decomposition values
 
 
 @dataclass(frozen=True)
@@ -44,7 +47,10 @@ class WarmStart:
     chosen: list[str]
     teams: dict[str, tuple[str, ...]]
     start: dict[str, int]
-    decomposition_values: list[int]  # every variable of the decomposition model, by proto index
+    # every variable of the decomposition model, by proto index (None: not found in time, the hint
+    # leaves them to CP-SAT)
+    decomposition_values: list[int] | None
+    improvement: str = "done"  # the local moves: "done", "cut" by their budget, or "skipped" (no time)
 
     def schedule(self, problem: AllocationProblem) -> Schedule:
         """The warm start as a schedule of its own (compacted like a search's solution)."""
@@ -61,39 +67,60 @@ class WarmStart:
 
 
 def warm_start(problem: AllocationProblem, balanced: Sequence[list[str]] = (), objective: Objective = Objective(),
-               budget: Budget = Budget(10.0), seed: int = 0, floor: float | None = None) -> WarmStart | None:
+               budget: Budget = Budget(10.0), seed: int = 0, floor: float | None = None,
+               deadline: Deadline = NEVER) -> WarmStart | None:
     """The list schedule of the least-work decomposition or of one of ``balanced`` (the load
     relaxation's), whichever is best for ``objective`` once improved by local moves
     (:mod:`.improve`): a quarter of ``budget`` shared by all, the rest for the best of them,
     none once one reaches ``floor`` (a lower bound on the objective); None when there is
-    none."""
+    none.  The list schedules are made by the ``deadline``: those made by then are all there
+    is (:class:`~.budget.OutOfTime` when not even the first is); the decomposition's values too
+    (without them the hint leaves those variables to CP-SAT).  The local moves take
+    :data:`MOVES_SHARE` of ``budget``; a clock budget too short for any move leaves the list
+    schedule as it is (``improvement`` "skipped")."""
     started = time.perf_counter()
+    deadline.check()
     candidates = [c for c in (*balanced, least_work_decomposition(problem))
                   if c is not None and all(d in problem.jobs for d in c)]
+    budget = budget.part(MOVES_SHARE) if not budget.deterministic else budget
+    moves = budget.deterministic or budget.rest(started).seconds >= MIN_IMPROVEMENT
     plans: list[tuple[float, int, list[str], Plan]] = []
+    cut = False
     for number, chosen in enumerate(candidates):
-        plan = greedy_plan(problem, chosen)
-        if plan is not None:
-            left = len(candidates) - number  # an equal part, for each candidate left, of the quarter left
-            share = budget.part(0.25).rest(started, left / len(candidates)).part(1 / left)
-            teams, start, value = improve(problem, chosen, *plan, objective, share, seed, floor)
-            plans.append((value, len(plans), chosen, (teams, start)))
+        try:
+            plan = greedy_plan(problem, chosen, deadline)
+        except OutOfTime:
+            if not plans:
+                raise
+            break  # the schedules made so far are all there is time for
+        if plan is None:
+            continue
+        left = len(candidates) - number  # an equal part, for each candidate left, of the quarter left
+        share = budget.part(0.25).rest(started, left / len(candidates)).part(1 / left) if moves else Budget(0.0)
+        found = improve_schedule(problem, chosen, *plan, objective, share, seed, floor)  # no budget: its value
+        plans.append((found.value, len(plans), chosen, (found.teams, found.start)))
+        cut = cut or found.cut
     plans.sort(key=lambda p: p[:2])
-    if plans:
+    if plans and moves:
         _, _, chosen, plan = plans[0]
-        teams, start, value = improve(problem, chosen, *plan, objective, budget.rest(started, 0.75), seed + 1, floor)
-        plans[0] = (value, 0, chosen, (teams, start))
+        found = improve_schedule(problem, chosen, *plan, objective, budget.rest(started, 0.75), seed + 1, floor)
+        plans[0] = (found.value, 0, chosen, (found.teams, found.start))
+        cut = cut or found.cut
+    improvement = "skipped" if not moves else "cut" if cut else "done"
     for _, _, chosen, plan in plans:
-        values = _decomposition_values(problem, set(chosen))
+        try:
+            values = _decomposition_values(problem, set(chosen), deadline)
+        except OutOfTime:  # a schedule all the same: the hint leaves the decomposition model's variables open
+            return WarmStart(chosen, *plan, None, improvement)
         if values is not None:
-            return WarmStart(chosen, *plan, values)
+            return WarmStart(chosen, *plan, values, improvement)
     return None
 
 
-def _decomposition_values(problem: AllocationProblem, chosen: set[str]) -> list[int] | None:
+def _decomposition_values(problem: AllocationProblem, chosen: set[str], deadline: Deadline = NEVER) -> list[int] | None:
     """The values of all the decomposition model's variables for ``chosen`` (its auxiliary
     variables included), so that the hint is complete: found by CP-SAT on a copy of the model
-    (before the allocation is added to it) with the decompositions fixed."""
+    (before the allocation is added to it) with the decompositions fixed, by the ``deadline``."""
     from ..solve.native import cmh
     from ..solve.run import FEASIBLE, INFEASIBLE, OPTIMAL, run_solver
 
@@ -103,7 +130,17 @@ def _decomposition_values(problem: AllocationProblem, chosen: set[str]) -> list[
         index = literal.index
         c = proto.constraints.add()
         c.bool_or.literals.append(index if (d in chosen) else -index - 1)
-    response = run_solver(proto, accept=(OPTIMAL, FEASIBLE, INFEASIBLE), what="the warm start")
+    parameters = cmh.SatParameters()
+    parameters.num_workers = 1
+    if deadline.passed():
+        raise OutOfTime
+    if deadline.left() < float("inf"):
+        parameters.max_time_in_seconds = deadline.left()
+    try:
+        response = run_solver(proto, accept=(OPTIMAL, FEASIBLE, INFEASIBLE), parameters=parameters,
+                              what="the warm start")
+    except IncompleteSolveError:
+        raise OutOfTime from None
     return None if response.status == INFEASIBLE else list(response.solution)
 
 
@@ -113,7 +150,7 @@ def least_work_decomposition(problem: AllocationProblem) -> list[str] | None:
     durations = problem.fleet.durations
     costs = CostModel(actions={a.name: durations.of_action(a.name, a.capabilities) for a in mission.domain.actions})
     try:
-        result = mission.decompose(DecompositionRequest(optimize=True, costs=costs))
+        result = decompose(mission, DecompositionRequest(optimize=True, costs=costs))
     except MissionError:
         return None
     if result.optimum is None:
@@ -123,19 +160,24 @@ def least_work_decomposition(problem: AllocationProblem) -> list[str] | None:
     return ids if all(d in problem.jobs for d in ids) else None
 
 
-def greedy_plan(problem: AllocationProblem, chosen: list[str]) -> Plan | None:
+def greedy_plan(problem: AllocationProblem, chosen: list[str], deadline: Deadline = NEVER) -> Plan | None:
     """Teams and start times for ``chosen`` by list scheduling (see the module docstring), None
-    when stuck."""
-    return _ListScheduler(problem, chosen).run()
+    when stuck; :class:`~.budget.OutOfTime` when the ``deadline`` passes first."""
+    return _ListScheduler(problem, chosen, deadline).run()
 
 
 class _ListScheduler:
     """Earliest finish first: of the jobs whose predecessors are placed, the one that can end
     soonest is placed next, on the robots that get it done soonest.  Estimates are refreshed
-    lazily: a job whose estimate grew since it was queued goes back into the queue."""
+    lazily: a job whose estimate grew since it was queued goes back into the queue.  The robots
+    that have not moved yet are taken by kind (start and speed, :meth:`~.problem.AllocationProblem.nearest`),
+    the others one by one, so that a fleet of thousands costs little more than its busy robots."""
 
-    def __init__(self, problem: AllocationProblem, chosen: list[str]) -> None:
+    def __init__(self, problem: AllocationProblem, chosen: list[str], deadline: Deadline = NEVER) -> None:
         self.problem = problem
+        self.deadline = deadline
+        self.moved: set[str] = set()  # robots placed on a job: no longer where they started
+        self.able: dict[str, tuple[tuple[str, ...], frozenset[str]]] = {}
         self.robots = problem.robots
         self.free = dict.fromkeys(self.robots, 0)
         self.place = {r.name: r.start for r in problem.fleet.robots}
@@ -155,6 +197,7 @@ class _ListScheduler:
         queue = [(0, self.position[j], j) for j in self.chosen if not waiting[j]]
         heapq.heapify(queue)
         while queue:
+            self.deadline.check()
             _, rank, j = heapq.heappop(queue)
             option = self._best(j)
             if option is None:
@@ -183,16 +226,28 @@ class _ListScheduler:
         if placed:
             team = placed[0]
         else:
-            able = [r for r in job.candidates
-                    if all(r in problem.jobs[p].candidates for p in self.partners.get(j, []))]
-            team = tuple(sorted(able, key=lambda r: (max(ready, self._arrival(r, job.location)), r))[:job.robots.min])
-        if len(team) < job.robots.min or not set(team) <= set(job.candidates) or len(team) > job.robots.max:
+            able, members = self._able(j)
+            first = problem.nearest(able, job.location, job.robots.min, ready, self.moved, self.deadline)
+            options = first + [r for r in self.moved if r in members]
+            team = tuple(sorted(options, key=lambda r: (max(ready, self._arrival(r, job.location)), r))[:job.robots.min])
+        if len(team) < job.robots.min or not set(team) <= problem.able(j) or len(team) > job.robots.max:
             return None
         return max([ready] + [self._arrival(r, job.location) for r in team]), team
+
+    def _able(self, j: str) -> tuple[tuple[str, ...], frozenset[str]]:
+        """The robots able to do ``j`` and every job it must share its robots with (in fleet
+        order, and as a set), once per job."""
+        if j not in self.able:
+            jobs = self.problem.jobs
+            needed = jobs[j].capabilities.union(*(jobs[p].capabilities for p in self.partners.get(j, [])))
+            able = self.problem.having(needed)  # the robots able to do every one of them
+            self.able[j] = (able, self.problem.members(able))
+        return self.able[j]
 
     def _place(self, j: str, start: int, team: tuple[str, ...]) -> None:
         job = self.problem.jobs[j]
         self.teams[j], self.start[j] = team, start
+        self.moved.update(team)
         for r in team:
             self.free[r] = start + job.duration
             self.place[r] = job.location or self.place[r]
@@ -213,7 +268,7 @@ def add_hint(am: AllocationModel, warm: WarmStart) -> None:
     m, problem = am.model, am.problem
     teams = warm.teams
     picked = set(warm.chosen)
-    for index, value in enumerate(warm.decomposition_values):
+    for index, value in enumerate(warm.decomposition_values or ()):
         m.proto.solution_hint.vars.append(index)
         m.proto.solution_hint.values.append(value)
     for (j, r), a in am.assign.items():
@@ -228,16 +283,17 @@ def add_hint(am: AllocationModel, warm: WarmStart) -> None:
             m.add_hint(arc.literal, (robot, arc.source, arc.target) in used)
     routes = _routes(problem, warm)
     for robot, idle in am.idle.items():
-        m.add_hint(idle, not routes[robot])
+        m.add_hint(idle, robot not in routes)
     for (j, robot), literal in am.last.items():
-        m.add_hint(literal, bool(routes[robot]) and routes[robot][-1] == j)
+        m.add_hint(literal, robot in routes and routes[robot][-1] == j)
     if am.makespan is not None:
         m.add_hint(am.makespan, max((start[j] + problem.jobs[j].duration for j in picked), default=0))
 
 
 def _routes(problem: AllocationProblem, warm: WarmStart) -> dict[str, list[str]]:
-    return {r: [j for j in jobs if problem.jobs[j].location is not None]
-            for r, jobs in robot_sequences(problem, warm.chosen, warm.teams, warm.start).items()}
+    """The located jobs of each robot that has any, in order (an idle robot is left out)."""
+    return {r: route for r, jobs in robot_sequences(problem, warm.chosen, warm.teams, warm.start).items()
+            if jobs and (route := [j for j in jobs if problem.jobs[j].location is not None])}
 
 
 def _all_starts(problem: AllocationProblem, warm: WarmStart) -> dict[str, int]:
