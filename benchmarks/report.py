@@ -386,6 +386,10 @@ def main(argv: list[str]) -> int:
     data = load(name)
     rows = data["rows"]
     by = {(r["family"], r["n"], r["algorithm"]): r for r in rows}
+    if name == "full" and (RESULTS / "small.json").exists():  # run.py --small-only: the start-up rows, rerun
+        small = load("small")
+        rows = [r for r in rows if r["family"] not in ("small", "plugin")] + small["rows"]
+        by = {(r["family"], r["n"], r["algorithm"]): r for r in rows}
     if (RESULTS / "large.json").exists():  # benchmarks/large.py: one run of the largest mission
         by.update({(r["family"], r["n"], r["algorithm"]): r for r in load("large")["rows"]})
     m = data["machine"]

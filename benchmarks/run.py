@@ -321,13 +321,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, help="per-run time limit in seconds (default 120, 30 with --quick)")
     parser.add_argument("--no-dissertation", action="store_true", help="skip the dissertation's own worlds")
     parser.add_argument("--no-small", action="store_true", help="skip the reference missions run whole")
+    parser.add_argument("--small-only", action="store_true",
+                        help="only the reference missions run whole and the editor plug-in's call, beside the "
+                             "original (results/small.json; docs/benchmarks.md shows them in place of the full "
+                             "run's)")
     args = parser.parse_args(argv)
     ladder = QUICK_LADDER if args.quick else FULL_LADDER
     if args.max_n:
         ladder = [n for n in ladder if n <= args.max_n]
     repeats = args.repeats or (1 if args.quick else 3)
     timeout = args.timeout or (30.0 if args.quick else 120.0)
-    name = "quick" if args.quick else "full"
+    name = "quick" if args.quick else "small" if args.small_only else "full"
+    if args.small_only:
+        args.families = []
     started = time.time()
     rows: list[dict] = []
     compile_bytecode()
@@ -355,10 +361,10 @@ def main(argv: list[str] | None = None) -> int:
     failed = [r for r in rows if r["status"] not in ("ok", "timeout") and not r["algorithm"].startswith("original")]
     print(f"wrote {path} ({len(rows)} measurements, {result['elapsed_s']} s); "
           f"{len(failed)} failed runs", flush=True)
-    if not args.quick:  # the full run regenerates docs/benchmarks.md and its plots
+    if not args.quick:  # the full run (or the small missions' rerun) regenerates docs/benchmarks.md
         import report
 
-        report.main([name])
+        report.main(["full"])
     return 1 if failed else 0
 
 
