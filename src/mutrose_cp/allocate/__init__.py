@@ -14,21 +14,19 @@ when it runs, so reading and checking a fleet stays light.
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ..mission import Mission
-    from .allocation import Allocation
+    from .allocation import allocate
     from .fleet import Durations, Fleet, Robot, TravelSpec
     from .options import AllocationOptions, Objective
     from .problem import NoAllocationError
-    from .search import Progress
-    from .travel import TravelTimes
 
 # the public names, each loaded from its module on first use: the command line reads the bounds
 # of .options for every command, which must not load the fleet reader and the allocation problem
 _EXPORTS = {"Durations": "fleet", "Fleet": "fleet", "Robot": "fleet", "TravelSpec": "fleet",
-            "AllocationOptions": "options", "Objective": "options", "NoAllocationError": "problem"}
+            "AllocationOptions": "options", "Objective": "options", "NoAllocationError": "problem",
+            "allocate": "allocation"}
 
 
 def __getattr__(name: str) -> Any:
@@ -43,12 +41,3 @@ def __getattr__(name: str) -> Any:
 __all__ = ["AllocationOptions", "Durations", "Fleet", "NoAllocationError", "Objective", "Robot", "TravelSpec",
            "allocate"]
 
-
-def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions | None = None,
-             progress: Callable[[Progress], None] | None = None, travel: TravelTimes | None = None) -> Allocation:
-    """Allocate ``mission`` to ``fleet`` (see :func:`.allocation.allocate`); default options
-    when none are given."""
-    from .allocation import allocate as run
-    from .options import AllocationOptions
-
-    return run(mission, fleet, options if options is not None else AllocationOptions(), progress, travel)

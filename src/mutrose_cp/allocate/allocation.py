@@ -38,7 +38,7 @@ from .stages import improve_share, load_stage, lp_stage, model_stage, problem_st
 from .warmstart import WarmStart
 
 if TYPE_CHECKING:
-    from ..mission import Mission
+    from ..pipeline.stages import MissionStages
     from .travel import TravelTimes
 
 
@@ -91,14 +91,15 @@ class Allocation:
         return list(self.schedule.jobs)
 
 
-def allocate(mission: Mission, fleet: Fleet, options: AllocationOptions = AllocationOptions(),
+def allocate(mission: MissionStages, fleet: Fleet, options: AllocationOptions | None = None,
              progress: Callable[[Progress], None] | None = None, travel: TravelTimes | None = None) -> Allocation:
     """Choose a valid mission decomposition, the robots of each task and the times together
     (see the module docstring).  ``travel``: the fleet's :func:`~.problem.mission_travel`, when
     the caller has built it to check the fleet (built here otherwise).  Raises
     :class:`~.problem.NoAllocationError` (exit 3) when the fleet cannot execute any valid
     decomposition, and :class:`~mutrose_cp.solve.run.IncompleteSolveError` (exit 4) when the
-    time limit passes before any schedule is found."""
+    time limit passes before any schedule is found.  Default options when none are given."""
+    options = options if options is not None else AllocationOptions()
     phases = Phases(options.budget, options.counted_from)
     problem = problem_stage(phases, mission, fleet, travel)
     load = load_stage(phases, problem, options)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING, Callable
 
+from ..solve.embedding import DecompositionModel
 from ..solve.run import IncompleteSolveError
 from .bounds import LpBound, lp_bound
 from .budget import NEVER, Budget, OutOfTime
@@ -25,7 +26,7 @@ from .search import Progress, SearchLimits, SearchOutcome, search
 from .warmstart import WarmStart, add_hint, warm_start
 
 if TYPE_CHECKING:
-    from ..mission import Mission
+    from ..pipeline.stages import MissionStages
     from .travel import TravelTimes
 
 LOAD_SHARE = 0.1  # of the time limit, at most, for the load relaxation
@@ -37,7 +38,7 @@ MODEL_KEEP = 0.05  # kept for the search by the model
 END_KEEP = 0.02  # kept by the search for reading its schedule out
 
 
-def problem_stage(phases: Phases, mission: Mission, fleet: Fleet, travel: TravelTimes | None) -> AllocationProblem:
+def problem_stage(phases: Phases, mission: MissionStages, fleet: Fleet, travel: TravelTimes | None) -> AllocationProblem:
     """The decomposition model and the allocation problem, within the whole time left: without
     them there is nothing to allocate, so running out of time is :class:`IncompleteSolveError`
     (exit 4)."""
@@ -47,7 +48,7 @@ def problem_stage(phases: Phases, mission: Mission, fleet: Fleet, travel: Travel
     started = time.perf_counter()
     try:
         deadline = NEVER if budget.deterministic else budget.deadline()
-        problem = build_problem(mission.decomposition_model(), fleet, travel, deadline)
+        problem = build_problem(DecompositionModel.build(mission), fleet, travel, deadline)
     except OutOfTime:
         raise no_time(phases, "while the allocation problem was being built") from None
     phases.record("problem", DONE, time.perf_counter() - started)
