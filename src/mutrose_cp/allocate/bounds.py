@@ -36,7 +36,7 @@ from ..model.task_graph import OperatorVertex, TaskGraph, TaskVertex
 from ..solve.boolean_model import FALSE, TRUE, AndOf, Clause, Exactly, Lit, OrOf
 from .budget import LP_ITERATIONS, NEVER, Budget, Deadline, OutOfTime
 from .load import ways_in
-from .model import Objective
+from .options import Objective
 from .problem import AllocationProblem
 from .timed import run_within
 

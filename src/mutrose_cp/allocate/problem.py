@@ -16,7 +16,7 @@ import heapq
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping, TypeVar
 
 from ..errors import MissionError, Problem, closest
 from ..model import RobotNumber
@@ -34,6 +34,8 @@ class NoAllocationError(MissionError):
 
     exit_code = 3
 
+
+T = TypeVar("T")  # what a memo entry holds
 
 @dataclass(frozen=True)
 class Job:
@@ -90,7 +92,8 @@ class AllocationProblem:
             same = next((j.candidates for j in self.jobs.values() if j.capabilities == capabilities), None)
             self.memo[key] = same if same is not None else tuple(
                 r.name for r in self.fleet.robots if capabilities <= r.capabilities)
-        return self.memo[key]
+        found: tuple[str, ...] = self.memo[key]
+        return found
 
     def earliest_arrival(self, job: Job, deadline: Deadline = NEVER) -> int:
         """The quickest trip of an able robot from its start to ``job``'s place.  The candidates
@@ -158,14 +161,15 @@ class AllocationProblem:
         """Each robot's position in the fleet."""
         return {r.name: i for i, r in enumerate(self.fleet.robots)}
 
-    def _memo(self, kind: str, of: object, compute: Callable[[], Any]) -> Any:
+    def _memo(self, kind: str, of: object, compute: Callable[[], T]) -> T:
         """``compute()``, kept under ``kind`` for the object ``of`` (by identity: hashing a tuple
         of 100,000 names on every look-up would cost what the memo saves; the entry keeps ``of``
         alive, so its id is not reused)."""
         entry = self.memo.get((kind, id(of)))
         if entry is None or entry[0] is not of:
             entry = self.memo[(kind, id(of))] = (of, compute())
-        return entry[1]
+        value: T = entry[1]
+        return value
 
 
 def place_of(location: object) -> str | None:

@@ -161,7 +161,8 @@ def _distances(names: list[str], places: dict[str, Place], metric: str) -> np.nd
     distance = np.abs(dx) + np.abs(dy) if metric == "manhattan" else np.hypot(dx, dy)
     distance[np.isnan(distance)] = np.inf
     np.fill_diagonal(distance, 0.0)
-    return distance
+    table: np.ndarray = distance
+    return table
 
 
 def _shortest_paths(wanted: list[str], places: dict[str, Place], table: Mapping[tuple[str, str], float],
