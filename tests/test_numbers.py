@@ -196,11 +196,13 @@ def test_a_value_pinned_by_an_equality_is_kept_from_task_to_task(tmp_path, capsy
 
 
 def test_validate_rejects_a_decomposition_that_forgets_a_pinned_value(tmp_path, capsys):
-    """The original's output for the pinned mission lists [AT1;AT2]: the validator names AT2."""
+    """The original's output for the pinned mission lists [AT1;AT2]: the validator names AT2,
+    and nothing else (every field of the file is the mission's).  The output below is the
+    original's, as it writes it; where the original is at hand, the test says so."""
     folder = _pinned(tmp_path, None)
     mission = Mission.load(*(folder / p for p in ("hddl/domain.hddl", "gm/gm.json", "configuration/configuration.json")))
-    forged = {"actions": ["bump"],
-              "tasks": {f"t{k}": {"id": f"AT{k + 1}_1|1", "name": "TaskB", "arguments": {"?r": "robot", "?rm": "room"},
+    forged = {"actions": [{"name": "bump", "capabilities": "work"}],
+              "tasks": {f"t{k}": {"id": f"AT{k + 1}_1|1", "name": "TaskB", "arguments": {"?r": "Bot", "?rm": "room"},
                                   "arguments_values": {"?r": "", "?rm": "Room1"}, "locations": "Room1",
                                   "robots_num": {"fixed": "True", "num": "1"}, "preconditions": "", "effects": "",
                                   "triggering_events": "",
@@ -208,6 +210,9 @@ def test_validate_rejects_a_decomposition_that_forgets_a_pinned_value(tmp_path, 
                                   "group": "True", "divisible": "True"} for k in range(2)},
               "constraints": [{"type": "SEQ", "task_instances": {"t0": "t0", "t1": "t1"}}],
               "mission_decompositions": [["t0", "t1"]]}
+    if original.available():
+        files = [folder / p for p in ("hddl/domain.hddl", "gm/gm.json", "configuration/configuration.json")]
+        assert original.run(folder, *files).output == forged
     path = tmp_path / "forged.json"
     path.write_text(json.dumps(forged))
     report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state,

@@ -82,7 +82,7 @@ class _Progress:
             sys.stderr.write("\r\033[K")
 
 
-def _summary(args: argparse.Namespace, data: dict, line: str, mission: Mission | None = None) -> None:
+def _summary(args: argparse.Namespace, data: dict[str, object], line: str, mission: Mission | None = None) -> None:
     """The closing line on stderr (unless ``-q``) and the JSON summary on stdout (with
     ``--json-summary``); both name the four input files the command read."""
     if mission is not None:
@@ -243,8 +243,9 @@ class _AllocationProgress:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    """Check an output file against the mission: exit 0 when every listed mission
-    decomposition is valid, 1 when some is not (each violation on stdout), 2 on bad input."""
+    """Check an output file against the mission: exit 0 when the file's tasks and constraints are
+    the mission's and every listed mission decomposition is valid, 1 when not (each violation on
+    stdout), 2 on bad input (an unreadable file, or one that is no decomposition output)."""
     from .io.decomposition_output import load_decomposition_output
     from .validate import validate
 
@@ -255,7 +256,10 @@ def cmd_validate(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = _inputs(args)
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     output = load_decomposition_output(output_path)
-    report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state, output)
+    progress = _Progress(not args.quiet, "mission decompositions checked")
+    report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state, output,
+                      world=mission.knowledge, progress=progress)
+    progress.clear()
     for violation in report.violations:
         print(f"{output_path}: {violation}")
     if not args.quiet:
@@ -263,11 +267,12 @@ def cmd_validate(args: argparse.Namespace) -> int:
             print(f"note: {note}", file=sys.stderr)
     bad = sorted({v.decomposition for v in report.violations if v.decomposition is not None})
     file_level = sum(1 for v in report.violations if v.decomposition is None)
+    empty = " (the mission has no task instance)" if report.task_instances == 0 and not report.checked else ""
     _summary(args, {"command": "validate", "valid": report.valid, "checked": report.checked,
                     "invalid_decompositions": bad, "violations": [str(v) for v in report.violations],
-                    "notes": report.notes},
+                    "notes": report.notes, "task_instances": report.task_instances},
              f"{'valid' if report.valid else 'NOT valid'}: {report.checked - len(bad)} of {report.checked} mission "
-             f"decompositions valid" + (f", {file_level} problems in the file" if file_level else "")
+             f"decompositions valid" + (f", {file_level} problems in the file" if file_level else "") + empty
              + f" ({Path(output_path).name})", mission)
     return 0 if report.valid else 1
 
