@@ -9,7 +9,7 @@ item-delivery mission on a generated grid of places) with
   roads in ``travel.times``, every place of the world joined to two junctions).
 
 Each is one ``python -m mutrose_cp allocate ... --time-limit 5`` process, measured by this
-parent (wall time and peak memory, ``mutrose_cp.measure``), with the package's bytecode compiled
+parent (wall time and peak memory, ``mutrose_cp.compare.measure``), with the package's bytecode compiled
 first as an installed package has it.  The phases the command reports (``--json-summary``:
 done, cut by their share of the limit, or skipped) are recorded with the times.  Results go to
 ``benchmarks/results/allocation-limits.json`` and ``docs/benchmarks-allocation.md``.
@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import allocation  # noqa: E402
 from run import compile_bytecode, machine  # noqa: E402
 
-from mutrose_cp.measure import Measurement, run_measured  # noqa: E402
+from mutrose_cp.compare.measure import Measurement, run_measured  # noqa: E402
 
 LIMITS = allocation.RESULTS / "allocation-limits.json"
 DELIVERIES = 10

@@ -68,7 +68,7 @@ done about it:
 * **Output once per template.** The task entries of the forAll instances are equal up to renaming:
   each is formatted once per template (task, path, which parameter holds which value, and the
   values' sorts, which choose the attribute mappings) and filled with the instance's values
-  (`entry_templates.py`; the same bytes, checked entry by entry on every reference mission, random
+  (`output/entry_templates.py`; the same bytes, checked entry by entry on every reference mission, random
   missions and scaled worlds). Task entries at 5000 rooms: 2.1 s → 0.8 s.
 * **Long sequences.** The tasks of a sequence of n see ever longer prefixes of a shared fact's
   writers; copying those into sets and walking the fact's chain from its start made the encoding
@@ -107,7 +107,7 @@ done about it:
   goals and tasks, another room) are built once: the Task Graph is built, connected and
   trimmed with the first two copies, the last and the first of each shape, and every other
   copy is its representative's trimmed fragment with its own values, instances and grounded
-  decompositions (`stamping.py`, with the rules under which that is the same graph; the full
+  decompositions (`pipeline/stamping.py`, with the rules under which that is the same graph; the full
   construction runs otherwise); the constraints of a stamped copy are its source's, moved to
   its vertices. At 5000 rooms (one core) Task Graph 3.47 s → 1.95 s, constraints 2.0 s →
   0.18 s; whole run 11.6 s → 8.3 s, peak 437 MB → 418 MB (50,000 rooms: 127 s / 3972 MB →
@@ -115,17 +115,17 @@ done about it:
 * **Stamped copies in the output; the output's head beside the solve.** A stamped copy's task
   entries are its source copy's with its own keys, ids and values: they are formatted once per
   source copy with a slot for each, and filled per copy with one string format
-  (`copy_blocks.py`, with the rules under which that gives the same bytes): task entries at
+  (`output/copy_blocks.py`, with the rules under which that gives the same bytes): task entries at
   5000 rooms 1.19 s → 0.68 s. Most of the output (the actions, the task entries and the
   million constraints: 300 of its 330 MB) does not depend on the solver, so on two cores a
   forked child writes it to the output's temporary file while the parent encodes and solves;
-  the parent then writes the decompositions and the space after it (`output_ahead.py`, from
+  the parent then writes the decompositions and the space after it (`output/ahead.py`, from
   20,000 to 250,000 decompositions: the child copies the pages of the objects it reads, 410 +
   260 MB in all at 5000 rooms; at 50,000 rooms it would be 3.8 + 2.3 GB, where memory comes
   first). The stamped vertices are made from a recipe worked out once per source fragment, in
   one loop: Task Graph 1.75 s → 1.32 s. Whole run at 5000 rooms 8.2 s → 6.3 s (this machine,
   the same day), the same bytes. The peak memory measured is now the larger of one process's
-  peak and the sampled total of the run's processes (`measure.py`).
+  peak and the sampled total of the run's processes (`compare/measure.py`).
 * **Fewer passes, and no teardown.** What was still done once per vertex and level, or per
   question, and what the end of a run cost: the parallel conflicts of every parallel operator
   (one per forAll copy, below the one over all copies) walked the operator's subtree; they are
@@ -151,12 +151,12 @@ done about it:
   source's rows and a shift until something reads the rows (`Constraints.runs`; the output does
   not, and the counts by kind are read from the source's run), and the output makes one
   template per run, the text between the keys with a free place for each key, which every copy
-  fills with its own keys in one join (`constraint_texts.py`). A stamped copy's task entries
+  fills with its own keys in one join (`output/constraint_texts.py`). A stamped copy's task entries
   fill their source's text the same way: formatting it as a format string parsed its twenty
   kilobytes again for every copy. The kernel's share of writing 3.3 GB (3.3 s of `write` calls,
   copying into the page cache, more when the disk falls behind) no longer waits: where one
   process writes the whole output, a second thread writes the file in chunks of 8 MB while the
-  text is formatted (`write_behind.py`; the `write` call releases the interpreter's lock;
+  text is formatted (`output/write_behind.py`; the `write` call releases the interpreter's lock;
   output stage 17.9 s → 13.9 s, measured in one process). Grounding a path without conditions
   or effects, and the effects of a decomposition without effects, give one shared frozen record
   (a third of vital signs' decompositions). Measured side by side on this machine (fresh

@@ -26,8 +26,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from generate import REFERENCE, generate  # noqa: E402
 
-from mutrose_cp.measure import run_measured  # noqa: E402
-from mutrose_cp.mission import find_mission_files  # noqa: E402
+from mutrose_cp.compare.measure import run_measured  # noqa: E402
+from mutrose_cp.io.mission_files import find_mission_files  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
@@ -89,7 +89,7 @@ TIME = Path("/usr/bin/time")
 
 
 def measure(cmd: list[str], cwd: Path, timeout: float) -> dict:
-    """Run ``cmd`` as a child process (``mutrose_cp.measure``); wall time, peak RSS (MB), exit
+    """Run ``cmd`` as a child process (``mutrose_cp.compare.measure``); wall time, peak RSS (MB), exit
     status and the command's JSON summary.
 
     Linux records the forking parent's peak memory in the child's at ``exec``, so a 5 MB program
@@ -263,7 +263,7 @@ def run_plugin_calls(repeats: int, timeout: float, log) -> list[dict]:
     command line, each run inside a temporary copy of the mission folder as the plug-in runs it
     (the original writes the configuration's output file there).  The original is measured only
     where it is installed (``MUTROSE_ORIGINAL``)."""
-    dropin = [sys.executable, "-c", "import sys; from mutrose_cp.dropin import entry; sys.argv[0] = 'mutrose'; entry()"]
+    dropin = [sys.executable, "-c", "import sys; from mutrose_cp.cli.dropin import entry; sys.argv[0] = 'mutrose'; entry()"]
     tools = [("mutrose -p", dropin)]
     if original_installed():
         tools.append(("original -p", [str(ORIGINAL)]))

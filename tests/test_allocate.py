@@ -17,7 +17,7 @@ import pytest
 
 from allocation_checker import AllocationRuleBroken, check_allocation
 from mutrose_cp.api import Mission, find_mission_files
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 
 ROOT = Path(__file__).resolve().parent.parent
 DELIVERY = ROOT / "examples" / "item-delivery"

@@ -23,7 +23,7 @@ from mutrose_cp.allocate.problem import build_problem
 from mutrose_cp.allocate.schedule import compact, robot_sequences, robot_teams
 from mutrose_cp.allocate.warmstart import greedy_plan, least_work_decomposition, warm_start
 from mutrose_cp.api import Mission, find_mission_files
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 from allocation import generate  # noqa: E402

@@ -23,7 +23,7 @@ from mutrose_cp.allocate import AllocationOptions, Fleet
 import mutrose_cp.allocate.output  # noqa: F401  the solvers loaded before any limit counts
 from mutrose_cp.allocate.budget import Budget
 from mutrose_cp.api import Mission, find_mission_files
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 from allocation import generate  # noqa: E402

@@ -35,7 +35,7 @@ from typing import Any
 
 import pytest
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 
 HERE = Path(__file__).resolve().parent
 CASES = HERE / "bad_inputs"

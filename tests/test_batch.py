@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.batch.report import Progress
-from mutrose_cp.cli import main
+from mutrose_cp.cli.batch.report import Progress
+from mutrose_cp.cli.program import main
 
 from conftest import ROOT
 from test_interrupts import _coupled_mission
@@ -286,7 +286,7 @@ def test_each_needs_matches(tmp_path, capsys):
 
 def test_ray_without_ray_installed_says_how_to_install_it(tmp_path):
     write_manifest(tmp_path / "m.json", [{"command": "count", "inputs": [str(EXAMPLES / "item-delivery")]}])
-    code = ("import sys; sys.modules['ray'] = None; from mutrose_cp.cli import main; "
+    code = ("import sys; sys.modules['ray'] = None; from mutrose_cp.cli.program import main; "
             "sys.exit(main(['batch', 'm.json', '--ray']))")
     run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=60)
     assert run.returncode == 2
@@ -320,7 +320,7 @@ def test_the_dissertation_experiment_is_one_valid_manifest(tmp_path, reference):
     scalability folders, every job accepted by the command line's parser."""
     from ladder_manifest import main as write_manifest_of
 
-    from mutrose_cp.batch.manifest import check_jobs, read_manifest
+    from mutrose_cp.cli.batch.manifest import check_jobs, read_manifest
 
     assert write_manifest_of(["dissertation", str(tmp_path)]) == 0
     jobs = read_manifest(tmp_path / "dissertation.json")
@@ -332,3 +332,16 @@ def test_the_dissertation_experiment_is_one_valid_manifest(tmp_path, reference):
     assert len(jobs) == 2 * configurations
     assert len(check_jobs(jobs, tmp_path)) == len(jobs)
     assert {job.options[-1] for job in jobs} == {"exploratory", "--lenient-xml"}
+
+
+def job_processes(folder: Path) -> list[int]:
+    """The job processes (``mutrose_cp.cli.batch.child``) running in ``folder`` (for the tests of interrupted and killed batches)."""
+    found = []
+    for proc in Path("/proc").iterdir():
+        try:
+            if (proc.name.isdigit() and b"mutrose_cp.cli.batch.child" in (proc / "cmdline").read_bytes()
+                    and (proc / "cwd").resolve() == folder.resolve()):
+                found.append(int(proc.name))
+        except OSError:
+            continue
+    return found

@@ -31,10 +31,10 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
-from mutrose_cp.measure import Measurement
+from mutrose_cp.cli.program import main
+from mutrose_cp.compare.measure import Measurement
 
-from test_batch import EXAMPLES, batch, results, slow_mission, write_manifest
+from test_batch import EXAMPLES, batch, job_processes, results, slow_mission, write_manifest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 from generate import generate  # noqa: E402
@@ -255,7 +255,7 @@ CUT_BACK = """
 import dataclasses
 import sys
 from pathlib import Path
-from mutrose_cp.batch.journal import ResultsFile
+from mutrose_cp.cli.batch.journal import ResultsFile
 from mutrose_cp.errors import MissionError
 
 journal = ResultsFile(Path(sys.argv[1]))
@@ -343,33 +343,20 @@ def test_out_of_memory_under_an_inherited_address_space_limit_is_memory(tmp_path
     (-signal.SIGSEGV, "", (700, False)),  # a crash: under RLIMIT_DATA the peak would be near the limit
 ])
 def test_a_native_report_of_memory_is_memory(exit_status, stderr, limit):
-    from mutrose_cp.batch.statuses import CRASHED, MEMORY, MemoryLimit, classify
+    from mutrose_cp.cli.batch.statuses import CRASHED, MEMORY, MemoryLimit, classify
 
     run = Measurement(exit_status=exit_status, seconds=1.0, peak_mb=20.0, stdout="", stderr=stderr)
     expected = CRASHED if limit == (700, False) else MEMORY
     assert classify(run, MemoryLimit(*limit)) == expected
 
 
-def _job_processes(folder: Path) -> list[int]:
-    """The job processes (``mutrose_cp.batch.child``) running in ``folder``."""
-    found = []
-    for proc in Path("/proc").iterdir():
-        try:
-            if (proc.name.isdigit() and b"mutrose_cp.batch.child" in (proc / "cmdline").read_bytes()
-                    and (proc / "cwd").resolve() == folder.resolve()):
-                found.append(int(proc.name))
-        except OSError:
-            continue
-    return found
-
-
 def test_a_job_stopped_from_outside_is_interrupted_and_runs_again(tmp_path):
     slow = slow_mission(tmp_path / "slow")
     manifest = write_manifest(tmp_path / "m.json", [_count(slow, id="slow")])
     proc = _started(tmp_path, "m.json")
-    _wait_for(lambda: bool(_job_processes(tmp_path)), proc, "the job")
+    _wait_for(lambda: bool(job_processes(tmp_path)), proc, "the job")
     time.sleep(0.5)
-    for pid in _job_processes(tmp_path):
+    for pid in job_processes(tmp_path):
         os.kill(pid, signal.SIGTERM)
     proc.communicate(timeout=60)
     [line] = results(tmp_path / "m.results.jsonl")
@@ -390,7 +377,7 @@ def test_a_job_killed_at_its_time_limit_leaves_no_temporary_file(tmp_path):
     out = tmp_path / "out"
     _wait_for(lambda: out.is_dir() and any(p.name.endswith(".tmp") for p in out.iterdir()), proc, "the temporary file",
               seconds=60)
-    for pid in _job_processes(tmp_path):
+    for pid in job_processes(tmp_path):
         os.killpg(pid, signal.SIGSTOP)
     assert proc.wait(timeout=60) == 1, proc.communicate()
     [line] = results(tmp_path / "m.results.jsonl")

@@ -20,9 +20,10 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.batch.manifest import read_manifest
+from mutrose_cp.cli.batch.manifest import read_manifest
 
 from conftest import ROOT, require_reference
+from test_batch import job_processes
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from ladder_manifest import ladder_jobs  # noqa: E402
@@ -52,19 +53,6 @@ def _batch(folder: Path, *options: str) -> subprocess.CompletedProcess:
                          capture_output=True, text=True, timeout=480)
     assert "Traceback" not in run.stderr, run.stderr
     return run
-
-
-def _jobs_running_in(folder: Path) -> list[int]:
-    """The job processes (``mutrose_cp.batch.child``) still running in ``folder``."""
-    found = []
-    for proc in Path("/proc").iterdir():
-        try:
-            if (proc.name.isdigit() and b"mutrose_cp.batch.child" in (proc / "cmdline").read_bytes()
-                    and (proc / "cwd").resolve() == folder.resolve()):
-                found.append(int(proc.name))
-        except OSError:
-            continue
-    return found
 
 
 def _outputs(folder: Path) -> dict[str, bytes]:
@@ -113,7 +101,7 @@ def test_alone_local_pool_and_ray_write_the_same_bytes(tmp_path):
     done = len(journal.read_text().splitlines())
     assert 3 <= done < len(ladder) + len(_reference_jobs(reference))
     deadline = time.monotonic() + 10  # the cancelled jobs' processes get their SIGKILL
-    while _jobs_running_in(folders["ray"]):
+    while job_processes(folders["ray"]):
         assert time.monotonic() < deadline, "a job of the interrupted batch is still running"
         time.sleep(0.05)
     ray = _batch(folders["ray"], "--ray", "--jobs", "2")

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.cli.program import main
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 HOSPITAL = EXAMPLES / "hospital-disinfection"

@@ -6,7 +6,7 @@ import json
 import re
 from pathlib import Path
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 
 
 def _summary(out: str) -> dict:

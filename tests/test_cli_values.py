@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 

@@ -19,9 +19,9 @@ from pathlib import Path
 import pytest
 
 from conftest import require_reference
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.errors import MissionError
-from mutrose_cp.output_file import refuse_unsafe_outputs, written_together
+from mutrose_cp.output.files import refuse_unsafe_outputs, written_together
 
 ROOT = Path(__file__).resolve().parent.parent
 DELIVERY = ROOT / "examples" / "item-delivery"
@@ -138,7 +138,7 @@ def test_dropin_never_writes_its_output_over_an_input(tmp_path: Path):
     config["output"]["file_path"] = "knowledge/world_db.xml"
     (mission / "configuration" / "configuration.json").write_text(json.dumps(config))
     world = (mission / "knowledge" / "world_db.xml").read_bytes()
-    run = subprocess.run([sys.executable, "-m", "mutrose_cp.dropin", "hddl/hospital-disinfection.hddl",
+    run = subprocess.run([sys.executable, "-m", "mutrose_cp.cli.dropin", "hddl/hospital-disinfection.hddl",
                           "gm/hospital-disinfection-gm.json", "configuration/configuration.json"],
                          cwd=mission, capture_output=True, text=True, timeout=120, env=dict(os.environ))
     assert run.returncode == 2
@@ -177,7 +177,7 @@ def test_a_file_where_the_ihtn_folder_goes_is_refused(tmp_path: Path, capsys):
 
 @pytest.mark.parametrize("front_end", ["mutrose-cp", "mutrose"])
 def test_both_front_ends_tell_a_failure_alike(capsys, front_end: str):
-    from mutrose_cp import cli, dropin
+    from mutrose_cp.cli import program as cli, dropin
 
     report = cli._report if front_end == "mutrose-cp" else dropin._report
     assert report(OSError(errno.EFBIG, "File too large")) == 2  # a write error without a file name
@@ -237,7 +237,7 @@ def test_export_waits_for_a_run_writing_the_same_files(tmp_path: Path):
 
 
 @pytest.mark.parametrize("command", [["mutrose_cp", "decompose", str(HOSPITAL), "-o", "-"],
-                                     ["mutrose_cp.dropin", "hddl/hospital-disinfection.hddl",
+                                     ["mutrose_cp.cli.dropin", "hddl/hospital-disinfection.hddl",
                                       "gm/hospital-disinfection-gm.json", "configuration/configuration.json", "-p"]])
 def test_stdout_and_stderr_on_one_closed_pipe(tmp_path: Path, command: list[str]):
     """``… 2>&1 | head``: the message about the closed pipe cannot be told either; the command

@@ -24,7 +24,7 @@ import pytest
 
 import original
 from conftest import REFERENCE, require_reference
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.interrupt import FAULT_ENV
 from mutrose_cp.io.config import load_configuration
 from mutrose_cp.io.decomposition_output import load_decomposition_output
@@ -102,8 +102,8 @@ def test_an_xml_configuration_in_the_three_file_form(capsys, reference):
 
 
 def test_the_table_shows_counts_beyond_15_digits_by_their_magnitude():
-    from mutrose_cp.compare import FAILED, FINISHED, CompareRequest, CompareReport, Comparison, Run
-    from mutrose_cp.compare_report import render_table
+    from mutrose_cp.compare.run import FAILED, FINISHED, CompareRequest, CompareReport, Comparison, Run
+    from mutrose_cp.compare.report import render_table
 
     request = CompareRequest(Path("d.hddl"), Path("gm.txt"), Path("c.json"))
     runs = [Run("cpsat", FINISHED, 1.0, 30.0, 0, count=3**50), Run("exploratory", FINISHED, 2.0, 40.0, 0, count=3**50),
@@ -339,8 +339,8 @@ def test_plot_writes_a_bar_chart(tmp_path, capsys):
 
 def test_the_same_report_gives_the_same_chart(tmp_path):
     pytest.importorskip("matplotlib")
-    from mutrose_cp.compare import CompareRequest, compare
-    from mutrose_cp.compare_report import write_plot
+    from mutrose_cp.compare.run import CompareRequest, compare
+    from mutrose_cp.compare.report import write_plot
 
     report = compare(CompareRequest(*_files(HOSPITAL)))
     for name in ("a.svg", "b.svg", "c.png", "d.png"):
@@ -351,7 +351,7 @@ def test_the_same_report_gives_the_same_chart(tmp_path):
 
 
 def _files(folder: Path) -> tuple[Path, Path, Path]:
-    from mutrose_cp.mission import find_mission_files
+    from mutrose_cp.io.mission_files import find_mission_files
 
     return find_mission_files(folder)
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
-from mutrose_cp.mission import find_mission_files
+from mutrose_cp.cli.program import main
+from mutrose_cp.io.mission_files import find_mission_files
 
 from conftest import REFERENCE, require_reference
 

@@ -21,10 +21,10 @@ from pathlib import Path
 import pytest
 
 from conftest import REFERENCE, require_reference
-from mutrose_cp.mission import find_mission_files
+from mutrose_cp.io.mission_files import find_mission_files
 
 CONSOLE = REFERENCE / "console"
-DROP_IN = (sys.executable, "-m", "mutrose_cp.dropin")  # what the installed ``mutrose`` script runs
+DROP_IN = (sys.executable, "-m", "mutrose_cp.cli.dropin")  # what the installed ``mutrose`` script runs
 SUFFIX = ".p.stdout"
 
 

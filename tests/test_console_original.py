@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, Phase, given, seed, settings
 
 import missiongen
 import original
-from mutrose_cp.lexer_echo import LexerEcho
+from mutrose_cp.output.lexer_echo import LexerEcho
 from test_console_exact import DROP_IN, mission_copy, relative_files, run_as_plug_in
 from test_console_rules import condition_marker, edit_goal_model, goal_marker, reference_copy
 

@@ -1,5 +1,5 @@
 """The rules of the drop-in's stdout, one at a time, on small inputs: the ``-p`` text
-(mutrose_cp.console) and the original's lexer echo (mutrose_cp.lexer_echo).
+(mutrose_cp.output.console) and the original's lexer echo (mutrose_cp.output.lexer_echo).
 
 Where a rule was found by running the original, the expected text is what the original printed
 for that input (noted at the test); ``test_console_original.py`` runs the original itself.  The
@@ -20,13 +20,27 @@ from typing import Callable
 import pytest
 
 from conftest import ROOT, require_reference
-from mutrose_cp.console import (constraint_lines, decomposition_value, heading, instance_value,
-                                print_constraints, print_mission_decompositions, task_lines)
-from mutrose_cp.dropin import main, utf8_stdout
-from mutrose_cp.expansion import ParameterValue
-from mutrose_cp.lexer_echo import (STDIO_BUFFER, LexerEcho, condition_echo, echoed_text, unmatched,
-                                   unmatched_in_condition)
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.output.console import (
+    constraint_lines,
+    decomposition_value,
+    heading,
+    instance_value,
+    print_constraints,
+    print_mission_decompositions,
+    task_lines,
+)
+from mutrose_cp.cli.dropin import main, utf8_stdout
+from mutrose_cp.model.task_instances import ParameterValue
+from mutrose_cp.output.lexer_echo import (
+    STDIO_BUFFER,
+    LexerEcho,
+    condition_echo,
+    echoed_text,
+    unmatched,
+    unmatched_in_condition,
+)
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 
 EXAMPLE = ROOT / "examples" / "item-delivery"
 

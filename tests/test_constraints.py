@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.constraints import generate_constraints
+from mutrose_cp.pipeline.constraints import generate_constraints
 from mutrose_cp.errors import MissionError
 from mutrose_cp.mission import Mission
 
@@ -148,7 +148,7 @@ def test_robot_numbers_of_execution_constrained_tasks(tmp_path, first, second, o
 def test_the_constraint_list_reads_back_as_the_tuples_it_was_given():
     """The final list is kept by column; reading it back (iterating, by index, by slice) gives
     the same named tuples with the same kinds and flags, and it equals a list of them."""
-    from mutrose_cp.constraints import EC, FB, SEQ, Constraint, Constraints
+    from mutrose_cp.pipeline.constraints import EC, FB, SEQ, Constraint, Constraints
 
     given = [Constraint(SEQ, 3, 7), Constraint(FB, 7, 2), Constraint(EC, 4, 9, False, True),
              Constraint(EC, 9, 4, True, False), Constraint(EC, 1, 2, False, False)]
@@ -173,7 +173,7 @@ def test_the_constraint_list_reads_back_as_the_tuples_it_was_given():
 def test_a_list_of_constraints_reads_as_the_rows_it_would_be_stored_as():
     """The output reads constraints as stored rows (a plain list, which the API accepts, is
     stored first): each row stands for its constraint."""
-    from mutrose_cp.constraints import EC, FB, SEQ, Constraint, Constraints, constraint_of_row
+    from mutrose_cp.pipeline.constraints import EC, FB, SEQ, Constraint, Constraints, constraint_of_row
 
     given = [Constraint(SEQ, 3, 7), Constraint(FB, 7, 2), Constraint(EC, 4, 9, False, True),
              Constraint(EC, 9, 4, True, False), Constraint(EC, 1, 2, False, False)]
@@ -183,7 +183,7 @@ def test_a_list_of_constraints_reads_as_the_rows_it_would_be_stored_as():
 def _stored_with_moved_runs():
     """A list of two stored rows, then moved runs of another list (as a stamped mission's
     constraints are made), and the constraints it stands for."""
-    from mutrose_cp.constraints import EC, FB, SEQ, Constraint, Constraints
+    from mutrose_cp.pipeline.constraints import EC, FB, SEQ, Constraint, Constraints
 
     source = Constraints([Constraint(SEQ, 3, 7), Constraint(FB, 7, 2), Constraint(EC, 4, 9, False, True),
                           Constraint(EC, 9, 4, True, False)])
@@ -199,7 +199,7 @@ def test_moved_runs_are_counted_and_read_as_the_rows_they_stand_for():
     """Moved runs (a stamped copy's constraints) are kept as runs until something reads the
     rows: the length, the counts by kind and the runs come without storing them; every other
     read, and every append, stores them first, in their place."""
-    from mutrose_cp.constraints import EC, SEQ, Constraint
+    from mutrose_cp.pipeline.constraints import EC, SEQ, Constraint
 
     stored, expected = _stored_with_moved_runs()
     assert len(stored) == len(expected) == 12
@@ -228,7 +228,7 @@ def test_the_constraints_section_is_each_constraint_formatted_in_order(monkeypat
     streamed list holds them in order."""
     import io
 
-    from mutrose_cp import boost_json, constraint_texts as texts
+    from mutrose_cp.output import boost_json, constraint_texts as texts
 
     def one_by_one(constraints):
         return [(lambda head, tail: head + f"t{c.first}" + texts._BETWEEN_KEYS + f"t{c.second}" + tail)(
@@ -253,7 +253,7 @@ def test_the_constraints_section_is_each_constraint_formatted_in_order(monkeypat
 def test_implied_constraints_are_found_through_short_and_long_neighbour_lists():
     """Dropping implied constraints asks whether two neighbour lists share a vertex: scanned when
     both are short, through a set when they are long; absent lists share nothing."""
-    from mutrose_cp.constraints import _meet
+    from mutrose_cp.pipeline.constraints import _meet
 
     assert _meet([1, 2], [3, 2]) and not _meet([1, 2], [3, 4])
     assert _meet(list(range(100)), [500, 99]) and not _meet(list(range(100)), list(range(100, 200)))

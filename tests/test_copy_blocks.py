@@ -13,14 +13,16 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mutrose_cp.copy_blocks import CopyBlocks
-from mutrose_cp.entry_templates import EntryTemplates
+from mutrose_cp.output.copy_blocks import CopyBlocks
+from mutrose_cp.output.entry_templates import EntryTemplates
 from mutrose_cp.errors import MissionError
-from mutrose_cp.htn import ground_path
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.pipeline.htn import ground_path
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.model.configuration import SemanticMapping
 from mutrose_cp.model.task_graph import DecompositionVertex
-from mutrose_cp.output import OutputBuilder, OutputModel, PredicatePrinter
+from mutrose_cp.output.builder import OutputBuilder, OutputModel
+from mutrose_cp.output.predicates import PredicatePrinter
 
 from conftest import ROOT, require_reference
 from missiongen import MissionSpec, load_mission, repeated_rooms

@@ -41,7 +41,8 @@ from hypothesis import HealthCheck, Phase, event, given, note, seed, settings, t
 
 from mutrose_cp.errors import NoDecompositionError
 from mutrose_cp.model import Literal
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 
 from conftest import REFERENCE, require_reference
 from missiongen import (

@@ -52,7 +52,7 @@ def test_guide_allocation_runs_as_written(tmp_path, capsys):
     import json
     import shutil
 
-    from mutrose_cp.cli import main
+    from mutrose_cp.cli.program import main
 
     guide = (ROOT / "docs" / "guide.md").read_text(encoding="utf-8")
     section = guide[guide.index("## 8. Allocate it to a fleet"):guide.index("## 9.")]

@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from conftest import ROOT, require_reference
-from mutrose_cp.cli import main
-from mutrose_cp.domain_warnings import conflicting_declarations, short_subtask_calls, undeclared_types
+from mutrose_cp.cli.program import main
+from mutrose_cp.pipeline.domain_warnings import conflicting_declarations, short_subtask_calls, undeclared_types
 from mutrose_cp.io.hddl import parse_domain
 
 MISSIONS = ("missions/lab-samples-logistics", "missions/deliver-goods-equipment", "missions/food-logistics")

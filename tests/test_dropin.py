@@ -22,8 +22,8 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.dropin import ALGORITHM_ENV, MISSING, Invocation, Usage, main, parse
-from mutrose_cp.mission import find_mission_files
+from mutrose_cp.cli.dropin import ALGORITHM_ENV, MISSING, Invocation, Usage, main, parse
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.solve.decompose import Algorithm
 
 from conftest import ROOT, require_reference
@@ -35,8 +35,8 @@ DELIVERY = ROOT / "examples" / "item-delivery"
 
 def _mutrose(args: list[str], cwd: Path, **env: str) -> subprocess.CompletedProcess:
     """The command as a process, the way a tool starts it (the installed console script runs
-    ``mutrose_cp.dropin:entry``, as ``python -m mutrose_cp.dropin`` does)."""
-    return subprocess.run([sys.executable, "-m", "mutrose_cp.dropin", *args], cwd=cwd, capture_output=True,
+    ``mutrose_cp.cli.dropin:entry``, as ``python -m mutrose_cp.cli.dropin`` does)."""
+    return subprocess.run([sys.executable, "-m", "mutrose_cp.cli.dropin", *args], cwd=cwd, capture_output=True,
                           text=True, timeout=300, env={**os.environ, **env})
 
 
@@ -155,7 +155,7 @@ def test_plug_in_ihtn_invocation(mission, cfg, tmp_path):
 
 def test_the_package_installs_the_mutrose_command():
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    assert scripts["mutrose"] == "mutrose_cp.dropin:entry"
+    assert scripts["mutrose"] == "mutrose_cp.cli.dropin:entry"
     installed = Path(sys.executable).parent / "mutrose"
     if installed.exists():  # an installed package (CI): the script itself answers
         run = subprocess.run([str(installed)], capture_output=True, text=True, timeout=60)
@@ -246,7 +246,7 @@ def test_verbose_trace_shows_every_stage(tmp_path, capsys, monkeypatch):
 
 PROBE = """
 import json, sys, io, contextlib
-from mutrose_cp.dropin import main
+from mutrose_cp.cli.dropin import main
 with contextlib.redirect_stdout(io.StringIO()):
     status = main(sys.argv[1:])
 print(json.dumps([status, sorted(m for m in sys.modules if m.startswith(("mutrose_cp", "ortools", "numpy")))]))
@@ -264,9 +264,9 @@ def test_the_plug_in_calls_load_only_what_they_use(option, tmp_path):
                           option], cwd=folder, capture_output=True, text=True, timeout=300)
     status, modules = json.loads(run.stdout.strip().splitlines()[-1])
     assert status == 0, run.stderr
-    assert ("mutrose_cp.ihtn" in modules) == (option == "-h")
-    assert not {"mutrose_cp.cli", "ortools", "numpy"} & set(modules)
-    assert "mutrose_cp.lexer_echo" in modules and ("mutrose_cp.console" in modules) == (option == "-p")
+    assert ("mutrose_cp.output.ihtn" in modules) == (option == "-h")
+    assert not {"mutrose_cp.cli.program", "ortools", "numpy"} & set(modules)
+    assert "mutrose_cp.output.lexer_echo" in modules and ("mutrose_cp.output.console" in modules) == (option == "-p")
 
 
 def test_a_closed_stdout_ends_with_a_message_not_a_traceback(tmp_path):
@@ -276,7 +276,7 @@ def test_a_closed_stdout_ends_with_a_message_not_a_traceback(tmp_path):
     read_end, write_end = os.pipe()
     os.close(read_end)  # every write to stdout now fails with EPIPE
     try:
-        run = subprocess.run([sys.executable, "-m", "mutrose_cp.dropin",
+        run = subprocess.run([sys.executable, "-m", "mutrose_cp.cli.dropin",
                               *_relative(mission, mission / "configuration" / "configuration.json"), "-p"],
                              cwd=folder, stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=300)
     finally:

@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, event, given, settings
 
-from mutrose_cp.conditions import FactTest
+from mutrose_cp.model.state_tests import FactTest
 from mutrose_cp.mission import Mission
 from mutrose_cp.solve import encoding, replay
 from mutrose_cp.solve.encoding import AFTER, Encoder, Encoding

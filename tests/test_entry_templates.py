@@ -12,11 +12,14 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mutrose_cp.entry_templates import EntryTemplates
+from mutrose_cp.output.entry_templates import EntryTemplates
 from mutrose_cp.errors import MissionError
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.model.configuration import SemanticMapping
-from mutrose_cp.output import OutputBuilder, OutputModel, PredicatePrinter, boost_json
+from mutrose_cp.output.builder import OutputBuilder, OutputModel
+from mutrose_cp.output.predicates import PredicatePrinter
+from mutrose_cp.output.boost_json import boost_json
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

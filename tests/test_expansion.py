@@ -9,14 +9,15 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.errors import MissionError, NoDecompositionError
-from mutrose_cp.expansion import expand
+from mutrose_cp.pipeline.expansion import expand
 from mutrose_cp.io.config import load_configuration
 from mutrose_cp.io.goal_model import load_goal_model
 from mutrose_cp.io.hddl import load_domain
 from mutrose_cp.io.knowledge import load_knowledge
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 
 from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
 
@@ -253,7 +254,8 @@ def test_the_expansion_leaves_no_reference_cycles(example):
     The walk leaves none: nothing is unreachable after it."""
     import gc
 
-    from mutrose_cp.mission import Mission, find_mission_files
+    from mutrose_cp.mission import Mission
+    from mutrose_cp.io.mission_files import find_mission_files
 
     mission = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / example))
     collecting = gc.isenabled()
@@ -270,8 +272,9 @@ def test_the_expansion_leaves_no_reference_cycles(example):
 def test_instances_of_a_task_share_its_inferred_robot_number(reference):
     """Without ``RobotNumber``, a task's robot number is inferred from its parameters, once per
     abstract task: its instances (thousands on large missions) share the one record."""
-    from mutrose_cp.expansion import infer_robot_number
-    from mutrose_cp.mission import Mission, find_mission_files
+    from mutrose_cp.pipeline.expansion import infer_robot_number
+    from mutrose_cp.mission import Mission
+    from mutrose_cp.io.mission_files import find_mission_files
 
     mission = Mission.load(*find_mission_files(reference / "missions" / "vital-signs-monitoring"))
     by_task: dict[str, list] = {}
@@ -290,7 +293,7 @@ def test_a_query_that_reads_no_variable_is_run_once_and_one_that_does_per_elemen
     import sys
 
     from conftest import ROOT
-    from mutrose_cp import expansion
+    from mutrose_cp.pipeline import expansion
 
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from generate import generate

@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.errors import MissionError, NoDecompositionError
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.model.task_graph import ScopeVertex
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"

@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.errors import MissionError
 from mutrose_cp.io.config import load_configuration, parse_configuration_json, parse_configuration_xml
 from mutrose_cp.io.expressions import parse_condition, parse_forall, parse_node_text, parse_select

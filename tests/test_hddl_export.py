@@ -15,10 +15,10 @@ import pytest
 from unified_planning.io import PDDLReader
 
 from conftest import REFERENCE, ROOT, require_reference
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.io.hddl import load_domain, parse_domain
 from mutrose_cp.io.hddl_writer import HddlExport
-from mutrose_cp.hddl_problem import initial_facts
+from mutrose_cp.output.hddl_problem import initial_facts
 from mutrose_cp.model import Domain, GroundLiteral, InitialState
 
 

@@ -6,18 +6,10 @@ from __future__ import annotations
 import pytest
 
 from mutrose_cp.errors import MissionError
-from mutrose_cp.htn import (
-    PSEUDO_PREFIX,
-    DecompositionPath,
-    Fragment,
-    Step,
-    TreeNode,
-    expand_path,
-    repetitions,
-    ground_path,
-    task_paths,
-)
-from mutrose_cp.io.hddl import Comparison, Literal, NumericEffect, parse_domain
+from mutrose_cp.pipeline.htn import PSEUDO_PREFIX, expand_path, repetitions, ground_path, task_paths
+from mutrose_cp.model.decomposition_paths import DecompositionPath, Fragment, Step, TreeNode
+from mutrose_cp.model.domain import Comparison, Literal, NumericEffect
+from mutrose_cp.io.hddl import parse_domain
 
 HEADER = """(define (domain unit)
   (:types room - object)

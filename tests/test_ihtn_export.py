@@ -11,11 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
-from mutrose_cp.ihtn import write_ihtns
+from mutrose_cp.cli.program import main
+from mutrose_cp.output.ihtn import write_ihtns
 from mutrose_cp.interrupt import FAULT_ENV, Interrupted
-from mutrose_cp.mission import Mission, find_mission_files
-from mutrose_cp.output import OutputModel
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
+from mutrose_cp.output.builder import OutputModel
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 HOSPITAL = EXAMPLES / "hospital-disinfection"

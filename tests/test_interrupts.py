@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from mutrose_cp.interrupt import FAULT_ENV, Interrupted
-from mutrose_cp.output import atomic_writer
+from mutrose_cp.output.files import atomic_writer
 
 from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
 

@@ -10,16 +10,7 @@ import pytest
 
 from mutrose_cp.errors import MissionError
 from mutrose_cp.io.goal_model import load_goal_model, parse_goal_model
-from mutrose_cp.model import (
-    AnnotationLeaf,
-    AnnotationOp,
-    Atom,
-    BoolOp,
-    Context,
-    GoalModel,
-    RobotNumber,
-    VarDecl,
-)
+from mutrose_cp.model import AnnotationLeaf, AnnotationOp, Atom, BoolOp, Context, GoalModel, RobotNumber, VarDecl
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 

@@ -25,7 +25,7 @@ from hypothesis import HealthCheck, Phase, given, seed, settings
 from conftest import ROOT, require_reference
 from missiongen import MissionSpec, load_mission, long_sequences
 from test_layered import written_paths
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.errors import NoDecompositionError
 from mutrose_cp.io.decomposition_output import load_decomposition_output
 from mutrose_cp.mission import Mission

@@ -17,7 +17,7 @@ HEAVY = ("pandas", "numpy", "networkx", "clarabel", "matplotlib", "graphviz", "s
 
 PROBE = """
 import json, sys
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 status = main(sys.argv[1:])
 print(json.dumps([status, sorted({m.split('.')[0] for m in sys.modules})]))
 """

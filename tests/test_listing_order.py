@@ -15,7 +15,8 @@ import missiongen
 from conftest import require_reference
 from test_conformance import _cases
 from mutrose_cp.errors import NoDecompositionError
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.solve.listing_order import ExploratoryOrder
 
 EXAMPLES = int(os.environ.get("MUTROSE_DIFF_EXAMPLES", "120"))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import shutil
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 
 from conftest import require_reference
 

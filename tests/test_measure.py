@@ -1,4 +1,4 @@
-"""Measured child processes (``mutrose_cp.measure``): output, exit status, time limit and cancel
+"""Measured child processes (``mutrose_cp.compare.measure``): output, exit status, time limit and cancel
 end the child's whole process group."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.measure import Cancelled, run_measured
+from mutrose_cp.compare.measure import Cancelled, run_measured
 
 # a child that starts a grandchild in its process group, prints the group id, then waits
 FAMILY = [sys.executable, "-c", "import os, subprocess, sys, time; subprocess.Popen(['sleep', '60']); "
@@ -65,7 +65,7 @@ def test_cancel_kills_the_group_and_measures_nothing(tmp_path):
 def test_what_a_run_printed_is_read_once_for_every_caller():
     """The summary is the last stdout line that is a JSON object (a stray "{" line is skipped, not
     a crash); the error lines lose their prefix; an unknown signal still reads as one."""
-    from mutrose_cp.measure import Measurement
+    from mutrose_cp.compare.measure import Measurement
 
     run = Measurement(-999, 1.0, 10.0, '{"count": "3"}\n{not json\n[1]\n', "note\nerror: bad goal\nerror: bad task\n")
     assert run.summary == {"count": "3"}

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.errors import MissionError
 from mutrose_cp.io.config import parse_configuration_json
 from mutrose_cp.io.knowledge import load_knowledge

@@ -16,7 +16,7 @@ import pytest
 import original
 from numericgen import decomposition_actions as _actions, valid_decompositions as _valid
 from missiongen import Action, Change, Cmp, GoalNode, Method, MissionSpec, Room, Task, TaskNode
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.io.decomposition_output import load_decomposition_output
 from mutrose_cp.mission import Mission
 from mutrose_cp.validate import validate

@@ -30,7 +30,7 @@ from hypothesis import HealthCheck, given, settings
 import missiongen
 import numericgen
 import original
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.io.decomposition_output import load_decomposition_output
 from mutrose_cp.mission import Mission
 from mutrose_cp.validate import validate

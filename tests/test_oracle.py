@@ -17,9 +17,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 import missiongen
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.io.decomposition_output import load_decomposition_output
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.validate import validate
 
 ORACLE = settings(max_examples=25, deadline=None, database=None,

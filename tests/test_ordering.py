@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.errors import NoDecompositionError
 from mutrose_cp.mission import Mission
 

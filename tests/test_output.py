@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
-from mutrose_cp.output import boost_json, write_boost_json
+from mutrose_cp.cli.program import main
+from mutrose_cp.output.boost_json import boost_json, write_boost_json
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 
@@ -116,7 +116,7 @@ def test_xml_leaf_lists_are_left_out_when_empty():
     and no element at all (not even an empty one) when there is nothing to list."""
     import io
 
-    from mutrose_cp.output import _XmlWriter
+    from mutrose_cp.output.builder import _XmlWriter
 
     fh = io.StringIO()
     w = _XmlWriter(fh)
@@ -134,7 +134,7 @@ def test_a_large_document_is_written_while_it_is_serialized():
     members, the last member of each container without its comma)."""
     import io
 
-    from mutrose_cp.boost_json import _FLUSH_PARTS
+    from mutrose_cp.output.boost_json import _FLUSH_PARTS
 
     tree = {"count": "3", "components": [{"count": str(i), "alternatives": [[f"t{i}", f"t{i + 1}"], []]}
                                          for i in range(_FLUSH_PARTS // 4)], "end": ""}

@@ -18,10 +18,12 @@ import pytest
 
 from mutrose_cp.errors import MissionError
 from mutrose_cp.interrupt import FAULT_ENV
-from mutrose_cp.mission import Mission, find_mission_files
-from mutrose_cp.output import OutputModel, write_output
-from mutrose_cp import output_ahead
-from mutrose_cp.output_ahead import AHEAD_MIN_DECOMPOSITIONS, output_while_solving
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
+from mutrose_cp.output.builder import OutputModel
+from mutrose_cp.output.formats import write_output
+from mutrose_cp.output import ahead as output_ahead
+from mutrose_cp.output.ahead import AHEAD_MIN_DECOMPOSITIONS, output_while_solving
 from mutrose_cp.solve.decompose import DecompositionRequest
 
 from conftest import ROOT, require_reference
@@ -167,8 +169,8 @@ def test_a_full_disk_in_the_writer_keeps_the_old_output(tmp_path: Path) -> None:
 STUCK_WRITER = """
 import os, sys
 from mutrose_cp.mission import Mission
-from mutrose_cp.output import OutputModel
-from mutrose_cp.output_ahead import output_while_solving
+from mutrose_cp.output.builder import OutputModel
+from mutrose_cp.output.ahead import output_while_solving
 fifo, *mission = sys.argv[1:]
 reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # never read: the writer blocks once the pipe is full
 m = Mission.load(*mission)
@@ -222,7 +224,7 @@ def test_a_memory_limited_run_writes_its_head_in_one_process(tmp_path: Path) -> 
               "resource.setrlimit(resource.RLIMIT_DATA, (8 << 30, 8 << 30))\n"
               "def no_fork(): raise AssertionError('forked')\n"
               "os.fork = no_fork\n"
-              "from mutrose_cp.cli import main\n"
+              "from mutrose_cp.cli.program import main\n"
               "sys.exit(main(sys.argv[1:]))\n")
     result = subprocess.run([sys.executable, "-c", script, "decompose", *map(str, mission), "-q", "-o", str(out)],
                             cwd=tmp_path, capture_output=True, text=True, timeout=300)

@@ -14,10 +14,10 @@ from typing import Callable
 import pytest
 
 from conftest import REFERENCE, require_reference
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.io.config import load_configuration
 from mutrose_cp.io.decomposition_output import load_decomposition_output
-from mutrose_cp.output_compare import ASPECTS, OutputView, diff_outputs, natural_key, nearest
+from mutrose_cp.compare.outputs import ASPECTS, OutputView, diff_outputs, natural_key, nearest
 
 TOOL = REFERENCE.parent / "tools" / "compare_outputs.py"
 

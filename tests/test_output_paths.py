@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.errors import MissionError
-from mutrose_cp.output_file import atomic_writer
+from mutrose_cp.output.files import atomic_writer
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 

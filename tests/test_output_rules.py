@@ -25,8 +25,9 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp.cli import build_parser, main
-from mutrose_cp.option_types import PATH_TYPES, input_file, output_file, output_folder
+from mutrose_cp.cli.parser import build_parser
+from mutrose_cp.cli.program import main
+from mutrose_cp.cli.option_types import PATH_TYPES, input_file, output_file, output_folder
 
 ROOT = Path(__file__).resolve().parent.parent
 DELIVERY = ROOT / "examples" / "item-delivery"
@@ -214,7 +215,7 @@ def test_dropin_does_not_wait_on_a_fifo_input(mission: Path):
     os.mkfifo(fifo)
     gm = next((mission / "gm").iterdir())
     config = next((mission / "configuration").iterdir())
-    proc = subprocess.Popen([sys.executable, "-c", "from mutrose_cp.dropin import entry; entry()",
+    proc = subprocess.Popen([sys.executable, "-c", "from mutrose_cp.cli.dropin import entry; entry()",
                              str(fifo), str(gm), str(config)], cwd=mission, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     try:

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from conftest import require_reference
-from mutrose_cp.mission import find_mission_files
+from mutrose_cp.io.mission_files import find_mission_files
 from test_conformance import _cases, _golden_path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -90,7 +90,7 @@ def test_the_default_drop_in_writes_the_goldens_byte_for_byte(mission, cfg, tmp_
     folder = tmp_path / mission.name
     shutil.copytree(mission, folder, ignore=shutil.ignore_patterns("output", "ihtn"))
     hddl, gm, _ = find_mission_files(mission, cfg.name)
-    run = subprocess.run([sys.executable, "-m", "mutrose_cp.dropin", f"hddl/{hddl.name}", f"gm/{gm.name}",
+    run = subprocess.run([sys.executable, "-m", "mutrose_cp.cli.dropin", f"hddl/{hddl.name}", f"gm/{gm.name}",
                           f"configuration/{cfg.name}"], cwd=folder, capture_output=True, text=True, timeout=300,
                          env={k: v for k, v in os.environ.items() if k != "MUTROSE_ALGORITHM"})
     assert run.returncode == 0, run.stderr

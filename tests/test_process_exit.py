@@ -8,8 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from mutrose_cp import process
-from mutrose_cp.cli import main
+from mutrose_cp.cli import process
+from mutrose_cp.cli.program import main
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 
@@ -19,7 +19,7 @@ def test_the_console_script_flushes_its_summary_and_runs_exit_handlers(tmp_path)
     script = (f"import atexit, sys\n"
               f"atexit.register(lambda: open({str(mark)!r}, 'w').write('ran'))\n"
               f"sys.argv = ['mutrose-cp', 'decompose', {str(EXAMPLE)!r}, '-q', '-o', {str(out)!r}, '--json-summary']\n"
-              f"from mutrose_cp.cli import entry\n"
+              f"from mutrose_cp.cli.program import entry\n"
               f"entry()\n")
     buffered = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}  # stdout held until flushed
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=buffered)

@@ -10,7 +10,7 @@ from conftest import require_reference as reference_dir
 from mutrose_cp.errors import MissionError
 from mutrose_cp.io.knowledge import load_knowledge
 from mutrose_cp.model import Atom, Binding, BoolOp, Condition, Select, WorldKnowledge
-from mutrose_cp.query import run_select
+from mutrose_cp.pipeline.query import run_select
 
 
 def _world(mission: str, name: str = "world_db.xml") -> WorldKnowledge:

@@ -6,7 +6,8 @@ import shutil
 
 from conftest import require_reference
 
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 
 # the storage domain of the HDDL specification: pick objects while more than one is left
 RECURSIVE_DOMAIN = """(define (domain storage)

@@ -1,4 +1,4 @@
-"""DOT views of a mission (``mutrose_cp.render``) and writing them to files.
+"""DOT views of a mission (``mutrose_cp.output.render``) and writing them to files.
 
 The checks use examples/hospital-disinfection: 3 rooms, 21 task instances, 27 task
 decompositions, 36 valid mission decompositions (see examples/README.md).  Rendering to pictures
@@ -16,10 +16,11 @@ from pathlib import Path
 
 import pytest
 
-from mutrose_cp import render as render_module
+from mutrose_cp.output import render as render_module
 from mutrose_cp.errors import MissionError, NoDecompositionError
-from mutrose_cp.mission import Mission, find_mission_files
-from mutrose_cp.render import (
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
+from mutrose_cp.output.render import (
     RenderError,
     decomposition_dot,
     goal_model_dot,

@@ -10,9 +10,10 @@ import sys
 import tracemalloc
 from pathlib import Path
 
-from mutrose_cp import expansion
-from mutrose_cp.cli import main
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.pipeline import expansion
+from mutrose_cp.cli.program import main
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "item-delivery"
 
@@ -136,7 +137,7 @@ def test_inputs_are_read_under_a_memory_limit_far_below_the_input_limit():
     """Reading a small file reserves a buffer of its size, not of the input limit (256 MB): a
     mission is checked in a process whose data may not exceed 120 MB."""
     code = ("import resource, sys; resource.setrlimit(resource.RLIMIT_DATA, (120 << 20, 120 << 20)); "
-            "from mutrose_cp.cli import main; sys.exit(main(sys.argv[1:]))")
+            "from mutrose_cp.cli.program import main; sys.exit(main(sys.argv[1:]))")
     run = subprocess.run([sys.executable, "-c", code, "check", str(EXAMPLE), "-q"], capture_output=True, text=True,
                          timeout=120)
     assert run.returncode == 0, run.stderr

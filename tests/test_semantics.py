@@ -9,9 +9,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from missiongen import load_mission, missions
-from mutrose_cp.constraints import Constraint, EC, SEQ
-from mutrose_cp.expansion import TaskInstance
-from mutrose_cp.htn import DecompositionPath, GroundPredicates, TreeNode
+from mutrose_cp.pipeline.constraints import Constraint, EC, SEQ
+from mutrose_cp.model.task_instances import TaskInstance
+from mutrose_cp.model.decomposition_paths import DecompositionPath, GroundPredicates, TreeNode
 from mutrose_cp.io.hddl import load_domain
 from mutrose_cp.model import Comparison, Literal, RobotNumber
 from mutrose_cp.model.task_graph import (
@@ -186,7 +186,8 @@ def test_a_task_sees_the_decompositions_that_enable_its_context():
 def test_seen_runs_agree_with_seen_sets_on_every_reference_task_graph(reference):
     """The runs rely on the depth-first numbering of the Task Graph: on every reference mission,
     what they select is what the sets hold, for every task and every scope vertex."""
-    from mutrose_cp.mission import Mission, find_mission_files
+    from mutrose_cp.mission import Mission
+    from mutrose_cp.io.mission_files import find_mission_files
 
     graphs = 0
     for folder in sorted(p for p in reference.glob("*/*") if (p / "configuration").is_dir()):

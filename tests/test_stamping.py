@@ -22,12 +22,13 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, event, given, settings
 
-from mutrose_cp.constraint_texts import SEPARATOR, constraint_texts
-from mutrose_cp.constraints import _stamped, generate_constraints
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.output.constraint_texts import SEPARATOR, constraint_texts
+from mutrose_cp.pipeline.constraints import _stamped, generate_constraints
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.model.task_graph import TaskGraph
-from mutrose_cp.stamping import plan_stamping
-from mutrose_cp.taskgraph import build_task_graph, stamped_task_graph
+from mutrose_cp.pipeline.stamping import plan_stamping
+from mutrose_cp.pipeline.task_graph_builder import build_task_graph, stamped_task_graph
 
 from conftest import ROOT, require_reference
 from missiongen import (Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission, repeated_rooms,

@@ -11,7 +11,7 @@ import pytest
 
 from mutrose_cp.errors import MissionError, NoDecompositionError
 from mutrose_cp.mission import Mission
-from mutrose_cp.constraints import EC
+from mutrose_cp.pipeline.constraints import EC
 from mutrose_cp.model.task_graph import EdgeKind, OperatorVertex, TaskGraphBuilder
 
 from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode, load_mission
@@ -167,7 +167,7 @@ def test_group_false_tasks_need_exactly_one_robot(tmp_path: Path, robots, ok):
 def test_the_finished_graph_knows_its_execution_constraint_edges_both_ways(reference):
     """The finished Task Graph answers from the partner lists (no set of linked pairs, the
     largest index of a large mission): the same answers, both directions."""
-    from mutrose_cp.mission import find_mission_files
+    from mutrose_cp.io.mission_files import find_mission_files
 
     tg = Mission.load(*find_mission_files(reference / "missions" / "vital-signs-monitoring")).task_graph
     tasks = [t.index for t in tg.tasks()]
@@ -255,7 +255,7 @@ def test_successors_of_one_kind_read_like_a_list_of_pairs_once_frozen():
 def test_decomposition_keys_number_the_decompositions_in_vertex_order():
     """The output keys ``t0, t1, ...`` follow the decomposition vertices in index order, built
     once for everything that names them."""
-    from mutrose_cp.mission import find_mission_files
+    from mutrose_cp.io.mission_files import find_mission_files
 
     tg = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / "item-delivery")).task_graph
     keys = tg.decomposition_keys
@@ -266,7 +266,7 @@ def test_decomposition_keys_number_the_decompositions_in_vertex_order():
 def test_a_tasks_decompositions_are_its_decomposition_vertices_in_order():
     """A task's decompositions are the decomposition vertices whose parent it is, in vertex
     order, on the finished graph as while it is built; other vertices have none."""
-    from mutrose_cp.mission import find_mission_files
+    from mutrose_cp.io.mission_files import find_mission_files
     from mutrose_cp.model.task_graph import DecompositionVertex, TaskVertex
 
     tg = Mission.load(*find_mission_files(Path(__file__).resolve().parent.parent / "examples" / "item-delivery")).task_graph

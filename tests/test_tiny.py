@@ -9,7 +9,8 @@ from hypothesis import HealthCheck, given, settings
 
 from conftest import require_reference
 from missiongen import MissionSpec, load_mission, missions
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.solve.boolean_model import Compare, ValueAfter
 from mutrose_cp.solve.cpsat import _components, _simple_choice, enumerate_with_cp_sat
 from mutrose_cp.solve.tiny import enumerate_tiny, free_variables

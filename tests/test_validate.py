@@ -22,9 +22,10 @@ from pathlib import Path
 import pytest
 from conftest import REFERENCE, ROOT, require_reference
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.io.decomposition_output import load_decomposition_output
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.validate import validate
 
 MISSIONS = REFERENCE / "missions"
@@ -716,7 +717,7 @@ NUMBERING = """(define (domain numbering)
 def _numbered(task: str) -> list[tuple[str, ...]]:
     """The actions of ``task``'s decompositions |1, |2, ... by the validator, and the same by the
     decomposers' HTN module (two readings of one rule, docs/formats/hddl.md)."""
-    from mutrose_cp import htn
+    from mutrose_cp.pipeline import htn
     from mutrose_cp.io.hddl import parse_domain
     from mutrose_cp.validate.numbering import task_decompositions
 

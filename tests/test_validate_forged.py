@@ -25,9 +25,10 @@ from conftest import ROOT
 from lxml import etree
 from test_validate import broken_copy, task_key
 
-from mutrose_cp.cli import main
+from mutrose_cp.cli.program import main
 from mutrose_cp.io.decomposition_output import load_decomposition_output
-from mutrose_cp.mission import Mission, find_mission_files
+from mutrose_cp.mission import Mission
+from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.validate import validate
 
 HOSPITAL = ROOT / "examples" / "hospital-disinfection"

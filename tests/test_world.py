@@ -21,7 +21,7 @@ from mutrose_cp.model import (
     SemanticMapping,
     WorldDbConfig,
 )
-from mutrose_cp.world import build_initial_state
+from mutrose_cp.pipeline.initial_state import build_initial_state
 
 
 def _mission_state(mission: str, config_name: str = "configuration.json", base: str = "missions") -> InitialState:

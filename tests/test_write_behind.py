@@ -14,9 +14,9 @@ import threading
 
 import pytest
 
-from mutrose_cp import write_behind
-from mutrose_cp.output_file import atomic_writer
-from mutrose_cp.write_behind import WriteBehind
+from mutrose_cp.output import write_behind
+from mutrose_cp.output.files import atomic_writer
+from mutrose_cp.output.write_behind import WriteBehind
 
 
 @pytest.fixture
@@ -88,7 +88,7 @@ def test_a_file_size_limit_hit_midway_keeps_the_old_output(tmp_path):
     out.write_text("previous")
     program = textwrap.dedent(f"""
         from mutrose_cp.errors import MissionError
-        from mutrose_cp.output_file import atomic_writer
+        from mutrose_cp.output.files import atomic_writer
         try:
             with atomic_writer({str(out)!r}, behind=True) as fh:
                 for _ in range(20_000):

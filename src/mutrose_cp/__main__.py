@@ -1,4 +1,4 @@
 """Allow ``python -m mutrose_cp``."""
-from .cli import entry
+from .cli.program import entry
 
 entry()

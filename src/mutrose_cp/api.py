@@ -24,7 +24,8 @@ See ``docs/api.md`` and ``examples/allocation.py`` (robot allocation and schedul
 """
 from __future__ import annotations
 
-from .mission import Mission, find_mission_files
+from .mission import Mission
+from .io.mission_files import find_mission_files
 from .solve.embedding import ConstraintInfo, CpLiteral, DecompositionInfo, DecompositionModel
 
 __all__ = ["Mission", "DecompositionModel", "DecompositionInfo", "ConstraintInfo", "CpLiteral",

@@ -26,7 +26,7 @@ from .io.mission_files import (
     world_ambiguity,
     world_file,
 )
-from .check import check_annotations, cross_check
+from .pipeline.checks import check_annotations, cross_check
 from .pipeline.recursion import deep
 from .pipeline.stages import MissionStages
 from .solve import decomposers

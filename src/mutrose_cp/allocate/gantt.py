@@ -2,7 +2,7 @@
 
 Work is drawn as solid bars labelled with the task, travel as hatched grey bars before them,
 so the time a robot spends moving stands apart from the time it spends working.  Matplotlib is
-the optional ``bench`` extra (:mod:`mutrose_cp.charts`).
+the optional ``bench`` extra (:mod:`mutrose_cp.output.charts`).
 
 Robot and task names are the fleet's and the mission's, any text: they are drawn as they are
 written, never read as matplotlib's mathematical notation (``$x^`` would fail the drawing, and
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import os
 
-from ..charts import chart_format, figure, save_chart
+from ..output.charts import chart_format, figure, save_chart
 from .allocation import Allocation
 
 FORMATS = ("png", "svg")

@@ -13,8 +13,9 @@ import json
 import os
 from typing import Any
 
-from ..output import OutputModel, write_output
-from ..output_file import atomic_writer
+from ..output.builder import OutputModel
+from ..output.formats import write_output
+from ..output.files import atomic_writer
 from .allocation import Allocation
 from .phases import CUT, SKIPPED
 

@@ -12,13 +12,7 @@ from typing import Any, Callable
 from lxml import etree
 
 from ..errors import MissionError, Problem, closest, located
-from ..model.configuration import (
-    Configuration,
-    OutputConfig,
-    SemanticMapping,
-    VarMapping,
-    WorldDbConfig,
-)
+from ..model.configuration import Configuration, OutputConfig, SemanticMapping, VarMapping, WorldDbConfig
 from ..model.records import element_children, text_of
 from .text import decode_utf8, parse_json, read_bytes
 from .tolerant_xml import parse_tolerant_xml, source_line

@@ -20,16 +20,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from ..errors import MissionError
 from .grammar import cached_lalr_parser
-from ..model.expressions import (
-    Annotation,
-    AnnotationLeaf,
-    AnnotationOp,
-    Atom,
-    BoolOp,
-    Condition,
-    ForAll,
-    Select,
-)
+from ..model.expressions import Annotation, AnnotationLeaf, AnnotationOp, Atom, BoolOp, Condition, ForAll, Select
 
 # ---------------------------------------------------------------------------------------------
 # Parsers.  The Lark instances are built once (lazily, on first use) and the parse functions are

@@ -15,14 +15,7 @@ from typing import Any, Callable, TypeVar
 
 from ..errors import MissionError, Problem, closest
 from ..model.goal_model import Context, GMNode, GoalModel, RobotNumber, VarDecl
-from .expressions import (
-    FORALL_HINT,
-    SELECT_HINT,
-    parse_condition,
-    parse_forall,
-    parse_node_text,
-    parse_select,
-)
+from .expressions import FORALL_HINT, SELECT_HINT, parse_condition, parse_forall, parse_node_text, parse_select
 from .text import decode_utf8, parse_json, read_bytes
 
 # ---------------------------------------------------------------------------------------------

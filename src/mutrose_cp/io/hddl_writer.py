@@ -56,7 +56,7 @@ _INDENT = "  "
 class ProblemData:
     """A mission as an HDDL problem: objects, initial state and one totally ordered network.
 
-    Built by :mod:`mutrose_cp.hddl_problem`; ``facts`` and ``values`` use the domain's
+    Built by :mod:`mutrose_cp.output.hddl_problem`; ``facts`` and ``values`` use the domain's
     predicate and function names (the writer renames them as it renames their declarations)."""
 
     name: str

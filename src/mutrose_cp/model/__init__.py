@@ -9,12 +9,12 @@ later stage only reads them:
   conditions, ``select`` and ``forAll``; ``io.expressions``);
 * :mod:`~mutrose_cp.model.configuration` — the :class:`Configuration` (``io.config``);
 * :mod:`~mutrose_cp.model.world` — the :class:`WorldKnowledge` (``io.knowledge``), the
-  :class:`InitialState` built from it through the configuration (``mutrose_cp.world``), and the
-  :class:`Binding` of a goal-model variable during the expansion (``mutrose_cp.expansion``,
-  read by ``mutrose_cp.query`` and ``mutrose_cp.conditions``);
+  :class:`InitialState` built from it through the configuration (``mutrose_cp.pipeline.initial_state``), and the
+  :class:`Binding` of a goal-model variable during the expansion (``mutrose_cp.pipeline.expansion``,
+  read by ``mutrose_cp.pipeline.query`` and ``mutrose_cp.pipeline.conditions``);
 * :mod:`~mutrose_cp.model.records` — how a world record (an XML element) reads, as the
   original's PropertyTree reads it;
-* :mod:`~mutrose_cp.model.task_graph` — the Task Graph that ``mutrose_cp.taskgraph`` builds from
+* :mod:`~mutrose_cp.model.task_graph` — the Task Graph that ``mutrose_cp.pipeline.task_graph_builder`` builds from
   all of the above and the decomposers read (imported from its module: its vertices refer to
   the types of the later stages).
 
@@ -38,25 +38,8 @@ from .domain import (
     Subtask,
     show_precondition,
 )
-from .expressions import (
-    Annotation,
-    AnnotationLeaf,
-    AnnotationOp,
-    Atom,
-    BoolOp,
-    Condition,
-    ForAll,
-    Select,
-)
-from .goal_model import (
-    Context,
-    GMNode,
-    GoalModel,
-    RobotNumber,
-    VarDecl,
-    base_type,
-    is_collection_type,
-)
+from .expressions import Annotation, AnnotationLeaf, AnnotationOp, Atom, BoolOp, Condition, ForAll, Select
+from .goal_model import Context, GMNode, GoalModel, RobotNumber, VarDecl, base_type, is_collection_type
 from .world import Binding, GroundLiteral, InitialState, Number, WorldKnowledge
 
 __all__ = [

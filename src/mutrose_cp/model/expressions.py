@@ -7,7 +7,7 @@
 
 Produced by the parsers of :mod:`mutrose_cp.io.expressions` while the goal model is read; read
 by the expansion (annotations, queries, forAll), the world-state tests of
-:mod:`mutrose_cp.conditions` and the query evaluator :mod:`mutrose_cp.query`.
+:mod:`mutrose_cp.pipeline.conditions` and the query evaluator :mod:`mutrose_cp.pipeline.query`.
 """
 from __future__ import annotations
 

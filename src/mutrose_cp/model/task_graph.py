@@ -16,9 +16,9 @@ from enum import StrEnum
 from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, Iterator, Mapping, NamedTuple, Self, Sequence, overload
 
 if TYPE_CHECKING:  # the types of the stages that produce a vertex's content
-    from ..conditions import Test
-    from ..expansion import TaskInstance
-    from ..htn import DecompositionPath, GroundPredicates
+    from .state_tests import Test
+    from .task_instances import TaskInstance
+    from .decomposition_paths import DecompositionPath, GroundPredicates
     from .world import Binding
 
 
@@ -86,7 +86,7 @@ class _Vertex:
 
     def stamped(self, index: int, parent: int, **content: Any) -> Self:
         """The same vertex at another position with other content: a vertex of a forAll copy
-        made from the same vertex of an identical copy (:mod:`mutrose_cp.stamping`)."""
+        made from the same vertex of an identical copy (:mod:`mutrose_cp.pipeline.stamping`)."""
         copied: Self = vertex_copier(type(self), tuple(content))(self, index, parent, *content.values())
         return copied
 
@@ -337,7 +337,7 @@ class TaskGraph(_Adjacency):
     # achieve goals that trimming removed (means-end goals, single-child chains above the root),
     # by the kept vertex that now stands for their subtree: their conditions are checked there
     achieve_carried: Mapping[int, tuple[ScopeVertex, ...]] = field(default_factory=dict)
-    # the forAll copies stamped from another (mutrose_cp.stamping), by forAll, in vertex order:
+    # the forAll copies stamped from another (mutrose_cp.pipeline.stamping), by forAll, in vertex order:
     # later stages may stamp what they make of a copy from what they make of its source
     stamped_copies: tuple[tuple[StampedCopy, ...], ...] = field(default=(), compare=False)
     # doubts met while building it: a recursion whose bound the world does not give

@@ -4,9 +4,9 @@ values goal-model variables take while the mission is expanded.
 * :class:`WorldKnowledge` is produced by :mod:`mutrose_cp.io.knowledge` (the world knowledge
   file, indexed for the queries);
 * :class:`InitialState` (objects per sort, :class:`GroundLiteral` facts, function values) is
-  built from it by :mod:`mutrose_cp.world` through the configuration's semantic mappings;
+  built from it by :mod:`mutrose_cp.pipeline.initial_state` through the configuration's semantic mappings;
 * :class:`Binding` is what the expansion binds a goal-model variable to; the query evaluator
-  :mod:`mutrose_cp.query` and the condition tests read it.
+  :mod:`mutrose_cp.pipeline.query` and the condition tests read it.
 """
 from __future__ import annotations
 

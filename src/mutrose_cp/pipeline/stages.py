@@ -11,14 +11,15 @@ from functools import cached_property
 from pathlib import Path
 from typing import Callable
 
-from ..constraints import Constraints, generate_constraints
-from ..expansion import Expansion, expand
-from ..htn import DecompositionPath, all_task_paths
+from .constraints import Constraints, generate_constraints
+from .expansion import Expansion, expand
+from ..model.decomposition_paths import DecompositionPath
+from .htn import all_task_paths
 from ..io.mission_files import resolve_output_path
 from ..model import Configuration, Domain, GoalModel, InitialState, WorldKnowledge
 from ..model.task_graph import TaskGraph
-from ..taskgraph import build_task_graph
-from ..world import build_initial_state
+from .task_graph_builder import build_task_graph
+from .initial_state import build_initial_state
 from .recursion import deep
 
 

@@ -16,8 +16,8 @@ from typing import NamedTuple
 
 from ortools.sat.python import cp_model
 
-from ..constraints import Constraint, ConstraintKind
-from ..expansion import TaskInstance
+from ..pipeline.constraints import Constraint, ConstraintKind
+from ..model.task_instances import TaskInstance
 from ..model import RobotNumber
 from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex
 from ..pipeline.stages import MissionStages

@@ -19,8 +19,9 @@ import functools
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Sequence
 
-from ..conditions import AllOf, FactTest, Test, ValueTest, compare
-from ..constraints import Constraint
+from ..model.state_tests import AllOf, FactTest, Test, ValueTest
+from ..pipeline.conditions import compare
+from ..pipeline.constraints import Constraint
 from ..model import Comparison, Configuration, Domain, GoalModel, InitialState, Literal, show_precondition
 from ..model.task_graph import TaskGraph, TaskVertex
 from .boolean_model import (

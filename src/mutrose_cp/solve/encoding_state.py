@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Generic, Sequence, TypeVar
 
-from ..constraints import Constraint
+from ..pipeline.constraints import Constraint
 from ..model import Configuration, Domain, GoalModel, InitialState
 from ..model.task_graph import TaskGraph
 from .boolean_model import BoolModel, Lit

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
-from ..constraints import Constraint
+from ..pipeline.constraints import Constraint
 from ..errors import NoDecompositionError, Problem
 from ..model import Configuration, Domain, GoalModel, InitialState, Literal
 from ..model.task_graph import ScopeVertex, TaskGraph, TaskVertex

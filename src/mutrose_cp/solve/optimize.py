@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Mapping
 
 from ..errors import MissionError, NoDecompositionError
-from ..htn import TreeNode
+from ..model.decomposition_paths import TreeNode
 from ..io.text import decode_utf8, read_bytes
 from ..model.task_graph import TaskGraph
 

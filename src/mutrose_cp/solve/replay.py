@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from itertools import islice
 from typing import Any, Callable, Sequence
 
-from ..conditions import AllOf, AnyOf, FactTest, Test
+from ..model.state_tests import AllOf, AnyOf, FactTest, Test
 from ..model import Literal
 from ..model.task_graph import OperatorVertex, ScopeVertex, TaskVertex
 from .boolean_model import FALSE, TRUE, AndOf, Clause, Const, Exactly, Lit, OrOf, Record

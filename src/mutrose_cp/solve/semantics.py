@@ -26,11 +26,20 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Iterable, Iterator, Mapping, Sequence, TypeVar, overload
 
-from ..conditions import AllOf, Test, ValueTest, compare, holds, translate
-from ..constraints import EC, SEQ, Constraint
+from ..model.state_tests import AllOf, Test, ValueTest
+from ..pipeline.conditions import compare, holds, translate
+from ..pipeline.constraints import EC, SEQ, Constraint
 from ..errors import MissionError
 from ..model import Binding, Configuration, Domain, GoalModel, InitialState, Literal, show_precondition
-from ..model.task_graph import Decomposition, DecompositionVertex, EdgeKind, OperatorVertex, ScopeVertex, TaskGraph, TaskVertex
+from ..model.task_graph import (
+    Decomposition,
+    DecompositionVertex,
+    EdgeKind,
+    OperatorVertex,
+    ScopeVertex,
+    TaskGraph,
+    TaskVertex,
+)
 from .numeric import StartCondition, StartConditions, scaled
 
 AtomKey = tuple[str, tuple[str, ...]]

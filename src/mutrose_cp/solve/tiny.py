@@ -13,7 +13,7 @@ from __future__ import annotations
 import itertools
 from typing import Sequence
 
-from ..conditions import compare
+from ..pipeline.conditions import compare
 from .boolean_model import (
     FALSE,
     TRUE,

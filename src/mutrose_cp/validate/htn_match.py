@@ -10,7 +10,7 @@ subtasks, each action its own preconditions and effects.  All arguments are expr
 root task's parameter names (``?r``, ``?rm``); a variable the root does not bind becomes
 ``?~name``, and the literals that mention it are not ground.
 
-This shares nothing with :mod:`mutrose_cp.htn`, which generates paths forwards with a symbolic
+This shares nothing with :mod:`mutrose_cp.pipeline.htn`, which generates paths forwards with a symbolic
 state; here the domain is read backwards from the file, so a mistake in either shows up as a
 mismatch.
 """

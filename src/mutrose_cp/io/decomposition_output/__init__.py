@@ -16,8 +16,7 @@ validator reports it as a violation of that task, with the other fields still ch
 """
 from __future__ import annotations
 
-from ..text import decode_utf8, read_bytes
-from .json_form import read_json
+from .loader import load_decomposition_output
 from .records import (
     SECTIONS,
     DecompositionOutput,
@@ -27,17 +26,6 @@ from .records import (
     OutputTask,
     RobotsNum,
 )
-from .xml_form import read_xml
 
-__all__ = ["SECTIONS", "DecompositionOutput", "OutputAction", "OutputConstraint", "OutputPredicate", "OutputTask",
-           "RobotsNum", "load_decomposition_output"]
-
-
-def load_decomposition_output(path: str) -> DecompositionOutput:
-    """Read an output file; the format is told by its first character (``<`` is XML)."""
-    data = read_bytes(path, "decomposition output")
-    if data.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
-        return read_xml(data, path)
-    text = decode_utf8(data, path, "decomposition output")
-    del data  # the text is what is read from here on
-    return read_json(text, path)
+__all__ = ["DecompositionOutput", "OutputAction", "OutputConstraint", "OutputPredicate", "OutputTask",
+           "RobotsNum", "SECTIONS", "load_decomposition_output"]

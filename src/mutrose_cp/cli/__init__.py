@@ -1,0 +1,30 @@
+"""The command lines: ``mutrose-cp`` (:mod:`.program`: the entry point and the lazy table of
+commands; :mod:`.parser`; :mod:`.commands`, one handler per command), the drop-in ``mutrose``
+with the original's command line (:mod:`.dropin`), and ``batch``.
+
+``main``, ``entry`` and ``build_parser`` are offered here too, where scripts import them from,
+and loaded on first use: the drop-in, a module of this package, loads none of ``mutrose-cp``'s
+command line.
+"""
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .parser import build_parser
+    from .program import entry, main
+
+_EXPORTS = {"main": "program", "entry": "program", "build_parser": "parser"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+__all__ = ["build_parser", "entry", "main"]

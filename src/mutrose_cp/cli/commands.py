@@ -1,0 +1,491 @@
+"""The ``mutrose-cp`` commands: one handler per sub-command (``check``, ``decompose``,
+``allocate``, ``count``, ``validate``, ``compare``, ``graph``, ``export-hddl``), each given the
+parsed arguments and returning the exit status.
+
+Bad input ends with located messages on stderr and exit status 2; a mission without any valid
+decomposition exits with 3; nothing here prints a Python traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import sys
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Sequence
+
+from ..output.counts import shown_count
+from ..errors import MissionError, Problem
+from ..interrupt import phase
+from ..mission import Mission
+from ..io.mission_files import find_mission_files
+from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
+from .process import keep_until_exit
+from ..solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
+from ..solve.optimize import CostModel
+
+if TYPE_CHECKING:
+    from ..allocate.fleet import Fleet
+    from ..allocate.travel import TravelTimes
+
+
+
+def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
+    """(hddl, gm, config, mission folder or None) from ``HDDL GM CONFIG`` or ``MISSION_DIR``."""
+    files = args.inputs
+    if len(files) == 1:
+        hddl, gm, cfg = find_mission_files(files[0], getattr(args, "config", None),
+                                           hddl_name=getattr(args, "hddl", None), gm_name=getattr(args, "gm", None))
+        return hddl, gm, cfg, Path(files[0])
+    if len(files) == 3:
+        return Path(files[0]), Path(files[1]), Path(files[2]), None
+    raise MissionError("expected HDDL GM CONFIG, or a mission folder (hddl/ gm/ configuration/ knowledge/)")
+
+
+class _Progress:
+    """Progress lines on an interactive stderr; silent when redirected or ``--quiet``.
+
+    Called as ``progress(done, total)`` for its own label, or through :meth:`stage` as
+    ``(label, done, total)`` by the pipeline."""
+
+    def __init__(self, enabled: bool, label: str = "") -> None:
+        self.enabled = enabled and sys.stderr.isatty()
+        self.label = label
+        self.last = 0.0
+
+    def __call__(self, done: int, total: int) -> None:
+        self.stage(self.label, done, total)
+
+    def stage(self, label: str, done: int, total: int) -> None:
+        if not self.enabled:
+            return  # called once per component or copy: a large mission calls it 50,000 times
+        of = f"/{total}" if total else ""
+        self.show(f"{label}: {done}{of}", ended=bool(total) and done >= total, now=done >= total)
+
+    def show(self, text: str, *, ended: bool = False, now: bool = False) -> None:
+        """Redraw the line as ``text``, at most every 0.1 s unless ``now``; ``ended`` closes it."""
+        if not self.enabled:
+            return
+        moment = time.monotonic()
+        if moment - self.last < 0.1 and not now:
+            return
+        self.last = moment
+        sys.stderr.write(f"\r\033[K{text}" + ("\n" if ended else ""))
+        sys.stderr.flush()
+
+    def clear(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\r\033[K")
+
+
+def _summary(args: argparse.Namespace, data: dict[str, object], line: str, mission: Mission | None = None) -> None:
+    """The closing line on stderr (unless ``-q``) and the JSON summary on stdout (with
+    ``--json-summary``); both name the four input files the command read."""
+    if mission is not None:
+        files = {"hddl": mission.domain.source, "gm": mission.goal_model.source,
+                 "configuration": str(mission.config_path), "world": str(mission.world_path or "")}
+        data = {**data, "inputs": files}
+        line += "\n  read: " + ", ".join(f"{k} {v}" for k, v in files.items())
+    if getattr(args, "json_summary", False):
+        print(json.dumps(data, sort_keys=True))
+    if not getattr(args, "quiet", False):
+        print(line, file=sys.stderr)
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    hddl, gm, cfg, folder = _inputs(args)
+    start = time.perf_counter()
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    base = (folder if folder is not None else cfg.parent.parent).resolve()
+    written = (base / mission.config.output.file_path).resolve()
+    if base != written and base not in written.parents:
+        mission.warnings.append(f"{cfg}: output.file_path {mission.config.output.file_path} leaves the mission folder: "
+                                f"decompose would write {written}")
+    # expanding the goal model against the world surfaces the run-time checks too
+    exp = mission.expansion
+    _ = mission.task_graph
+    _ = mission.constraints
+    if args.fleet:
+        from ..allocate.fleet import Fleet
+
+        _check_fleet(mission, Fleet.read(args.fleet))
+    if not args.strict:
+        _warn(args, mission)
+    _check_domain(args, mission)
+    elapsed = time.perf_counter() - start
+    _summary(args, {"command": "check", "valid": True, "task_instances": len(exp.instances),
+                    "seconds": round(elapsed, 3)},
+             f"ok: {hddl.name}, {gm.name}, {cfg.name} are valid ({len(exp.instances)} task instances, "
+             f"{elapsed:.2f} s)", mission)
+    return 0
+
+
+def _check_domain(args: argparse.Namespace, mission: Mission) -> None:
+    """The domain's warnings (``domain_warnings``); with ``--strict`` every warning of the
+    mission is an error instead (exit 2)."""
+    from ..pipeline.domain_warnings import domain_warnings
+
+    found = domain_warnings(mission.domain, mission.goal_model)
+    if args.strict:
+        warned = [Problem("", w) for w in (*mission.warnings, *mission.initial_state.warnings)]
+        if warned or found:
+            raise MissionError([*warned, *found])
+    elif not args.quiet:
+        for problem in found:
+            print(f"warning: {problem}", file=sys.stderr)
+
+
+def _check_fleet(mission: Mission, fleet: Fleet) -> TravelTimes:
+    """The fleet's names against the mission, and travel times to every place the mission's
+    tasks are at (``check --fleet``, and before ``allocate`` solves, which then uses them)."""
+    from ..allocate.problem import fleet_problems, mission_travel
+
+    problems = fleet_problems(mission, fleet)
+    if problems:
+        raise MissionError(problems)
+    return mission_travel(mission, fleet)
+
+
+def cmd_allocate(args: argparse.Namespace) -> int:
+    """Choose the decomposition, the robots and the schedule together; write the schedule, the
+    chosen decomposition (and a Gantt chart)."""
+    start = time.perf_counter()  # the time limit counts from here: loading the solvers and the fleet is part of it
+    from ..allocate import AllocationOptions, Fleet, Objective
+    from ..allocate.output import objective_section, phases_section, summary_line, write_decomposition, write_schedule
+
+    hddl, gm, cfg, folder = _inputs(args)
+    objective = Objective.parse(args.objective)
+    if args.gantt:
+        from ..allocate.gantt import gantt_format
+
+        gantt_format(args.gantt)  # and matplotlib, before any work
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    _warn(args, mission)
+    fleet = Fleet.read(args.fleet)
+    travel = _check_fleet(mission, fleet)
+    out_path = Path(args.output) if args.output else _default_output(mission, folder)
+    schedule_path = Path(args.schedule) if args.schedule else _default_schedule(out_path)
+    _refuse_two_on_stdout(args, out_path, schedule_path)
+    _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
+    options = AllocationOptions(objective, args.time_limit, args.workers, args.seed, work_limit=args.work_limit,
+                                counted_from=start)
+    progress = _AllocationProgress(not args.quiet, objective.name)
+    try:
+        with phase("allocating"):
+            allocation = mission.allocate(fleet, options, progress, travel)
+    finally:
+        progress.close()
+    with phase("writing the output"), staged_outputs((schedule_path, out_path, args.gantt)):
+        if args.gantt:  # first: a chart that cannot be drawn leaves nothing written, not even on stdout
+            from ..allocate.gantt import write_gantt
+
+            write_gantt(allocation, args.gantt)
+        write_schedule(allocation, schedule_path)
+        write_decomposition(allocation, out_path, args.format or mission.config.output.file_type)
+    elapsed = time.perf_counter() - start
+    schedule = allocation.schedule
+    data = {"command": "allocate", "objective": objective_section(allocation), "makespan": schedule.makespan,
+            "travel": schedule.travel, "tasks": len(schedule.jobs),
+            "robots_used": sum(1 for v in schedule.routes.values() if v), "schedule": str(schedule_path),
+            "output": str(out_path), "gantt": args.gantt, "phases": phases_section(allocation),
+            "seconds": round(elapsed, 3)}
+    _summary(args, data, f"{summary_line(allocation)} -> {schedule_path}, {out_path}"
+             + (f", {args.gantt}" if args.gantt else "") + f" ({elapsed:.2f} s)", mission)
+    keep_until_exit(mission, fleet, allocation)  # a fleet of 100,000 robots takes a while to free
+    return 0
+
+
+def _default_schedule(out_path: Path) -> Path:
+    """``schedule.json`` beside the decomposition (in the current folder when that goes to
+    standard output)."""
+    return Path("schedule.json") if os.fspath(out_path) == STDOUT else out_path.with_name("schedule.json")
+
+
+def _refuse_two_on_stdout(args: argparse.Namespace, out_path: Path, schedule_path: Path) -> None:
+    """Standard output takes one document: the decomposition, the schedule or the summary."""
+    on_stdout = [name for name, path in (("-o", out_path), ("--schedule", schedule_path)) if os.fspath(path) == STDOUT]
+    if getattr(args, "json_summary", False):
+        on_stdout.append("--json-summary")
+    if len(on_stdout) > 1:
+        raise MissionError(f"{' and '.join(on_stdout)} would both print to standard output: send all but one "
+                           "to files")
+
+
+def _default_output(mission: Mission, folder: Path | None) -> Path:
+    """Where ``decompose`` would write: the configuration's output path (from the mission
+    folder when one was given)."""
+    if folder is not None and not Path(mission.config.output.file_path).is_absolute():
+        return folder / mission.config.output.file_path
+    return mission.output_path()
+
+
+class _AllocationProgress:
+    """The anytime progress line of ``allocate``: the incumbent, the bound and the gap."""
+
+    def __init__(self, enabled: bool, kind: str) -> None:
+        self.line = _Progress(enabled)
+        self.kind = kind
+
+    def __call__(self, progress: object) -> None:
+        from ..allocate.search import Progress
+
+        assert isinstance(progress, Progress)
+        best = "none yet" if progress.objective is None else f"{progress.objective:g}"
+        gap = "" if progress.gap is None else f", gap {100 * progress.gap:.1f}%"
+        self.line.show(f"allocating: {self.kind} {best}, bound {progress.bound:g}{gap} ({progress.seconds:.1f} s)")
+
+    def close(self) -> None:
+        self.line.clear()
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    """Check an output file against the mission: exit 0 when the file's tasks and constraints are
+    the mission's and every listed mission decomposition is valid, 1 when not (each violation on
+    stdout), 2 on bad input (an unreadable file, or one that is no decomposition output)."""
+    from ..io.decomposition_output import load_decomposition_output
+    from ..validate import validate
+
+    if len(args.inputs) not in (2, 4):
+        raise MissionError("expected HDDL GM CONFIG OUTPUT, or MISSION_DIR OUTPUT")
+    *mission_inputs, output_path = args.inputs
+    args.inputs = mission_inputs
+    hddl, gm, cfg, _folder = _inputs(args)
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    output = load_decomposition_output(output_path)
+    progress = _Progress(not args.quiet, "mission decompositions checked")
+    report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state, output,
+                      world=mission.knowledge, progress=progress)
+    progress.clear()
+    for violation in report.violations:
+        print(f"{output_path}: {violation}")
+    if not args.quiet:
+        for note in report.notes:
+            print(f"note: {note}", file=sys.stderr)
+    bad = sorted({v.decomposition for v in report.violations if v.decomposition is not None})
+    file_level = sum(1 for v in report.violations if v.decomposition is None)
+    empty = " (the mission has no task instance)" if report.task_instances == 0 and not report.checked else ""
+    _summary(args, {"command": "validate", "valid": report.valid, "checked": report.checked,
+                    "invalid_decompositions": bad, "violations": [str(v) for v in report.violations],
+                    "notes": report.notes, "task_instances": report.task_instances},
+             f"{'valid' if report.valid else 'NOT valid'}: {report.checked - len(bad)} of {report.checked} mission "
+             f"decompositions valid" + (f", {file_level} problems in the file" if file_level else "") + empty
+             + f" ({Path(output_path).name})", mission)
+    return 0 if report.valid else 1
+
+
+def _request(args: argparse.Namespace) -> DecompositionRequest:
+    """The decompose options as a library request (their combinations are checked before)."""
+    return DecompositionRequest(
+        algorithm=Algorithm(args.algorithm),
+        limit=None if args.limit == 0 else args.limit,
+        sample=args.sample,
+        seed=args.seed,
+        optimize=args.optimize,
+        costs=CostModel.read(args.costs) if args.optimize and args.costs else CostModel(),
+        explain=args.explain,
+    )
+
+
+def _note(request: DecompositionRequest, result: DecompositionResult) -> str:
+    """What the summary line says about the listed decompositions."""
+    if result.optimum is not None:
+        return f", optimum cost {result.optimum[1]}"
+    if request.sample is not None:
+        return f", {request.sample} sampled (seed {request.seed})"
+    if result.listed is not None:
+        return f", first {result.listed} listed"
+    return ""
+
+
+def cmd_decompose(args: argparse.Namespace) -> int:
+    from ..output.builder import OutputModel
+    from ..output.ahead import output_while_solving
+
+    hddl, gm, cfg, folder = _inputs(args)
+    start = time.perf_counter()
+    if args.algorithm == "exploratory":
+        used = ["--" + name for name in cpsat_options(limit=args.limit, sample=args.sample, optimize=args.optimize,
+                                                      explain=args.explain)]
+        if used:
+            raise MissionError(f"{', '.join(used)} {'needs' if len(used) == 1 else 'need'} the CP-SAT decomposer "
+                               "(the default): drop --algorithm exploratory")
+    if args.output == "-" and args.json_summary:
+        raise MissionError("-o - writes the output to standard output: drop --json-summary, which prints there too")
+    if args.sample is not None and (args.optimize or args.limit != DEFAULT_LIMIT):
+        raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    mission.progress = _Progress(not args.quiet).stage
+    _warn(args, mission)
+    # where and how the output goes is settled, and refused if unsafe, before any work
+    out_path = Path(args.output) if args.output else _default_output(mission, folder)
+    file_type = _output_format(args, mission)
+    if args.json_style == "standard" and file_type != "json":
+        raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
+                           "drop --json-style or write JSON (--format json)")
+    _refuse_inputs_as_output((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg, args.costs),
+                             folders=(args.ihtn,))
+    label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
+    progress = _Progress(not args.quiet, f"mission decompositions: {label}")
+    with phase("expanding the mission"):
+        tg = mission.task_graph
+        constraints = mission.constraints
+    request = _request(args)
+    if not tg.tasks() and not args.quiet:
+        print("warning: the mission has no task instances (no entity of the world matched its queries): "
+              "nothing to decompose", file=sys.stderr)
+    model = OutputModel(tg, constraints, [], mission.domain, mission.config, mission.initial_state)
+    if args.ihtn:
+        with phase("solving"):
+            result = mission.decompose(request, progress)
+        from ..output.ihtn import refuse_oversized_export, write_ihtns
+
+        model.decompositions = list(result.decompositions)
+        one = args.ihtn_orderings == "one"
+        with phase("counting iHTN files"):
+            files = refuse_oversized_export(model, one, args.ihtn_max, str(args.ihtn))
+        ihtn_progress = _Progress(not args.quiet, "iHTN files written")
+        with phase("exporting iHTNs"):
+            n_files = write_ihtns(model, Path(args.ihtn), lambda n: ihtn_progress(n, files),
+                                  one_per_decomposition=one)
+    else:
+        n_files = 0
+        # the task entries and constraints may be written by a second process while solving
+        with output_while_solving(model, out_path, file_type, args.json_style) as finish:
+            with phase("solving"):
+                result = mission.decompose(request, progress)
+            with phase("writing the output"):
+                finish(result.decompositions, result.space_section(tg.decomposition_keys.__getitem__))
+    keep_until_exit(mission, model, result)
+    total, note = result.total, _note(request, result)
+    elapsed = time.perf_counter() - start
+    kinds = constraints.count_by_kind()
+    data = {
+        "command": "decompose",
+        "algorithm": args.algorithm,
+        "task_instances": len(mission.expansion.instances),
+        "task_decompositions": len(tg.decompositions()),
+        "constraints": {k: kinds.get(k, 0) for k in ("SEQ", "FB", "EC")},
+        "mission_decompositions": str(total),
+        "output": str(args.ihtn) if args.ihtn else str(out_path),
+        "ihtn_files": n_files,
+        "seconds": round(elapsed, 3),
+    }
+    where = f"{n_files} iHTN files in {args.ihtn}" if args.ihtn else str(out_path)
+    _summary(args, data,
+             f"decomposed: {data['task_instances']} task instances, {data['task_decompositions']} task "
+             f"decompositions, constraints SEQ {kinds.get('SEQ', 0)} FB {kinds.get('FB', 0)} EC "
+             f"{kinds.get('EC', 0)}, {shown_count(total, digit_count=True)} valid mission decompositions{note} -> "
+             f"{where} ({elapsed:.2f} s)", mission)
+    return 0
+
+
+OUTPUT_SUFFIXES = {".json": "json", ".xml": "xml"}
+
+
+def _output_format(args: argparse.Namespace, mission: Mission) -> str:
+    """``--format``; else the suffix of ``-o`` (``x.json`` is JSON), with a warning when the
+    configuration asks for the other format; else the configuration's ``output.file_type``."""
+    configured = mission.config.output.file_type
+    if args.format:
+        return str(args.format)
+    by_suffix = OUTPUT_SUFFIXES.get(Path(args.output).suffix.lower()) if args.output else None
+    if by_suffix is None:
+        return configured
+    if by_suffix != configured and not args.quiet:
+        print(f"warning: {args.output}: writing {by_suffix}, as the suffix says, although {mission.config_path} asks "
+              f"for {configured} (output.file_type); --format {configured} follows the configuration",
+              file=sys.stderr)
+    return by_suffix
+
+
+def cmd_graph(args: argparse.Namespace) -> int:
+    from ..output.render import render, render_targets, view_dot
+
+    hddl, gm, cfg, _folder = _inputs(args)
+    start = time.perf_counter()
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    _warn(args, mission)
+    _refuse_inputs_as_output(render_targets(args.output), mission, (hddl, gm, cfg))
+    result = render(view_dot(mission, args.view, args.index), args.output)
+    if result.message:
+        print(result.message, file=sys.stderr)
+    elapsed = time.perf_counter() - start
+    _summary(args, {"command": "graph", "view": args.view, "output": str(result.path), "rendered": result.rendered,
+                    "seconds": round(elapsed, 3)},
+             f"graph: {args.view} view written to {result.path} ({elapsed:.2f} s)", mission)
+    return 0
+
+
+def _warn(args: argparse.Namespace, mission: Mission) -> None:
+    """The warnings of loading now, and those of later stages as they are found."""
+    if not getattr(args, "quiet", False):
+        for w in (*mission.warnings, *mission.initial_state.warnings):
+            print(f"warning: {w}", file=sys.stderr)
+        mission.report_warning = _print_warning
+
+
+def _print_warning(warning: str) -> None:
+    print(f"warning: {warning}", file=sys.stderr)
+
+
+def _refuse_inputs_as_output(outputs: Sequence[Path | str | None], mission: Mission,
+                             inputs: tuple[Path | str | None, ...], folders: Sequence[Path | str | None] = ()) -> None:
+    """Outputs that are inputs of the mission (the world included) or one another, or folders:
+    refused before anything is computed or written (``output_file.refuse_unsafe_outputs``)."""
+    refuse_unsafe_outputs(outputs, (*inputs, mission.world_path), folders)
+
+
+def cmd_count(args: argparse.Namespace) -> int:
+    hddl, gm, cfg, _folder = _inputs(args)
+    start = time.perf_counter()
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    _warn(args, mission)
+    with phase("expanding the mission"):
+        _ = mission.constraints
+    with phase("solving"):
+        space = mission.decomposition_space(_Progress(not args.quiet, "components solved"), keep=False)
+        total = space.count
+    elapsed = time.perf_counter() - start
+    _summary(args, {"command": "count", "mission_decompositions": str(total), "components": len(space.components),
+                    "seconds": round(elapsed, 3)},
+             f"counted: {shown_count(total, digit_count=True)} valid mission decompositions in "
+             f"{len(space.components)} independent components ({elapsed:.2f} s)", mission)
+    sys.stderr.flush()
+    print(total)  # the bare count is the last line of stdout
+    # like decompose: a mission whose tasks admit no valid combination is an error (status 3)
+    return 3 if total == 0 and mission.task_graph.tasks() else 0
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    """Run the decomposers on the mission and compare them (``compare.py``); the report as a
+    table, or as JSON with ``--json``.  Exit 0 when all that finished agree, 1 when not."""
+    from ..compare.run import CompareRequest, compare
+    from ..compare.report import plot_format, render_table, report_json, write_plot
+
+    hddl, gm, cfg, _folder = _inputs(args)
+    if args.plot:
+        plot_format(args.plot)  # before anything runs
+        world = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml).world_path
+        refuse_unsafe_outputs((args.plot,), (hddl, gm, cfg, world))
+    original = None
+    if args.original:
+        found = shutil.which(args.original)
+        if found is None:
+            raise MissionError("--original: not an executable file (the original tool, run as PATH HDDL GM CONFIG)",
+                               args.original)
+        original = Path(found).resolve()
+    request = CompareRequest(hddl, gm, cfg, time_limit=args.time_limit, limit=args.limit or None, original=original,
+                             lenient_xml=args.lenient_xml, max_input_mb=args.max_input_mb)
+    report = compare(request, None if args.quiet else lambda message: print(message, file=sys.stderr))
+    if args.plot:
+        write_plot(report, args.plot)
+    print(json.dumps(report_json(report), sort_keys=True) if args.json else render_table(report))
+    return report.exit_status
+
+
+def cmd_export_hddl(args: argparse.Namespace) -> int:
+    from .export_hddl import export_hddl
+
+    return export_hddl(args)
