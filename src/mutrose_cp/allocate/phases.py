@@ -68,6 +68,17 @@ class Phases:
         seconds = min(fraction * self.total, self.left() - keep * self.total)
         return Budget(seconds) if seconds >= MIN_PHASE else None
 
+    def begin(self, name: str, fraction: float, keep: float = 0.0, enabled: bool = True) -> Budget | None:
+        """The budget of phase ``name`` (:meth:`share`), or None when it does not run: turned
+        off by its option (recorded off) or without time left (recorded skipped)."""
+        if not enabled:
+            self.record(name, OFF, 0.0)
+            return None
+        budget = self.share(fraction, keep)
+        if budget is None:
+            self.skip(name)
+        return budget
+
     def record(self, name: str, status: str, seconds: float, note: str = "") -> None:
         self.outcomes.append(PhaseOutcome(name, status, seconds, note))
 

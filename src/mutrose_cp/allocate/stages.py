@@ -20,7 +20,7 @@ from .load import LoadBound, load_bound
 from .model import AllocationModel, build_model
 from .neighbourhood import is_large, restrict
 from .options import AllocationOptions
-from .phases import CUT, DONE, OFF, Phases
+from .phases import CUT, DONE, Phases
 from .problem import AllocationProblem, build_problem
 from .search import Progress, SearchLimits, SearchOutcome, search
 from .warmstart import WarmStart, add_hint, warm_start
@@ -67,12 +67,8 @@ def no_time(phases: Phases, when: str) -> IncompleteSolveError:
 
 def load_stage(phases: Phases, problem: AllocationProblem, options: AllocationOptions) -> LoadBound | None:
     """The load relaxation (:mod:`.load`), for its bound and the decompositions it suggests."""
-    if not (options.lp_bound or options.warm_start):
-        phases.record("load", OFF, 0.0)
-        return None
-    budget = phases.share(LOAD_SHARE, SEARCH_SHARE)
+    budget = phases.begin("load", LOAD_SHARE, SEARCH_SHARE, enabled=options.lp_bound or options.warm_start)
     if budget is None:
-        phases.skip("load")
         return None
     load = load_bound(problem, options.objective, budget, options.workers, options.seed)
     finished = load.status in ("OPTIMAL", "INFEASIBLE")
@@ -88,12 +84,8 @@ def improve_share(problem: AllocationProblem) -> float:
 def warm_stage(phases: Phases, problem: AllocationProblem, options: AllocationOptions,
                load: LoadBound | None, share: float) -> WarmStart | None:
     """The warm start (:mod:`.warmstart`): a first schedule, the search's hint."""
-    if not options.warm_start:
-        phases.record("warm", OFF, 0.0)
-        return None
-    budget = phases.share(share, SEARCH_SHARE)
+    budget = phases.begin("warm", share, SEARCH_SHARE, enabled=options.warm_start)
     if budget is None:
-        phases.skip("warm")
         return None
     started = time.perf_counter()
     try:
@@ -114,12 +106,8 @@ def warm_stage(phases: Phases, problem: AllocationProblem, options: AllocationOp
 
 def lp_stage(phases: Phases, problem: AllocationProblem, options: AllocationOptions) -> LpBound | None:
     """The LP bound (:mod:`.bounds`)."""
-    if not options.lp_bound:
-        phases.record("lp", OFF, 0.0)
-        return None
-    budget = phases.share(LP_SHARE, SEARCH_SHARE)
+    budget = phases.begin("lp", LP_SHARE, SEARCH_SHARE, enabled=options.lp_bound)
     if budget is None:
-        phases.skip("lp")
         return None
     lp = lp_bound(problem, options.objective, budget)
     cut = lp.status in ("MaxTime", "MaxIterations")
@@ -131,9 +119,8 @@ def model_stage(phases: Phases, problem: AllocationProblem, options: AllocationO
                 warm: WarmStart | None) -> AllocationModel | None:
     """The restriction of a large mission (:mod:`.neighbourhood`) and the joint model, hinted
     by the warm start; None when the time ran out before it was built."""
-    budget = phases.share(1.0, MODEL_KEEP)
+    budget = phases.begin("model", 1.0, MODEL_KEEP)
     if budget is None:
-        phases.skip("model")
         return None
     deadline = NEVER if budget.deterministic else budget.deadline()
     started = time.perf_counter()
