@@ -13,8 +13,9 @@ when it runs, so reading and checking a fleet stays light.
 """
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..lazy_exports import lazy_attributes
 
 if TYPE_CHECKING:
     from .allocation import allocate
@@ -29,13 +30,7 @@ _EXPORTS = {"Durations": "fleet", "Fleet": "fleet", "Robot": "fleet", "TravelSpe
             "allocate": "allocation"}
 
 
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_attributes(__name__, _EXPORTS)
 
 
 __all__ = ["AllocationOptions", "Durations", "Fleet", "NoAllocationError", "Objective", "Robot", "TravelSpec",

@@ -8,8 +8,9 @@ command line.
 """
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..lazy_exports import lazy_attributes
 
 if TYPE_CHECKING:
     from .parser import build_parser
@@ -18,13 +19,7 @@ if TYPE_CHECKING:
 _EXPORTS = {"main": "program", "entry": "program", "build_parser": "parser"}
 
 
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_attributes(__name__, _EXPORTS)
 
 
 __all__ = ["build_parser", "entry", "main"]
