@@ -13,47 +13,37 @@ from __future__ import annotations
 
 import re
 from functools import lru_cache
-from typing import Callable, Iterable, cast
+from typing import Any, Iterable, TypeVar
 
-from lark import Lark, Token, Transformer
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark import Token, Transformer
+from lark.exceptions import UnexpectedInput
 
 from ..errors import MissionError
-from .grammar import cached_lalr_parser
+from .grammar import EmbeddedLanguage, error_position
 from ..model.expressions import Annotation, AnnotationLeaf, AnnotationOp, Atom, BoolOp, Condition, ForAll, Select
 
 # ---------------------------------------------------------------------------------------------
-# Parsers.  The Lark instances are built once (lazily, on first use) and the parse functions are
-# memoised: the same few expressions are parsed once per goal-model instance, i.e. thousands of
-# times for large worlds, and every result is an immutable value.
+# The two languages.  Their parsers are built on first use and the parse functions are memoised:
+# the same few expressions are parsed once per goal-model instance, i.e. thousands of times for
+# large worlds, and every result is an immutable value.
+
+Operator = TypeVar("Operator", AnnotationOp, BoolOp)
 
 
+def _spliced(kind: type[Operator], op: str, operands: Iterable[Annotation] | Iterable[Condition]) -> Operator:
+    """An operator node, with operands of the same operator spliced in (spec §5 flattening).
 
-def _merge_annotation(op: str, operands: Iterable[Annotation]) -> AnnotationOp:
-    """Build an operator node, splicing in operands of the same kind (spec §5 flattening)."""
-    children: list[Annotation] = []
+    ``;``, ``#`` and ``FALLBACK`` are flattened as the original does; ``&&`` and ``||`` are
+    associative for every evaluator (and the original's select ``||`` bug, "keep only the left
+    operand", gives the same result on ``(a||b)||c`` and ``a||b||c``), so flattening loses
+    nothing and keeps trees shallow."""
+    children: list[Any] = []
     for operand in operands:
-        if isinstance(operand, AnnotationOp) and operand.op == op:
+        if isinstance(operand, kind) and operand.op == op:
             children.extend(operand.children)
         else:
             children.append(operand)
-    return AnnotationOp(op, tuple(children))
-
-
-def _merge_condition(op: str, operands: Iterable[Condition]) -> BoolOp:
-    """Build a ``&&``/``||`` node, splicing in operands of the same operator.
-
-    Both operators are associative for every evaluator (and the original's select ``||`` bug,
-    "keep only the left operand", gives the same result on ``(a||b)||c`` and ``a||b||c``), so
-    flattening loses nothing and keeps trees shallow.
-    """
-    children: list[Condition] = []
-    for operand in operands:
-        if isinstance(operand, BoolOp) and operand.op == op:
-            children.extend(operand.children)
-        else:
-            children.append(operand)
-    return BoolOp(op, tuple(children))
+    return kind(op, tuple(children))
 
 
 _AnnotationChild = Token | Annotation | None  # what _AnnotationBuilder's methods receive
@@ -75,7 +65,7 @@ def _condition(node: _ConditionChild) -> Condition:
 
 
 class _AnnotationBuilder(Transformer[Token, tuple[str, Annotation | None]]):
-    """Turns the ``annotation.lark`` parse into ``(id, Annotation | None)`` while parsing."""
+    """Turns the ``annotation.lark`` parse into ``(id, Annotation | None)``."""
 
     def start(self, children: list[_AnnotationChild]) -> tuple[str, Annotation | None]:
         name, _description, annotation = children
@@ -92,17 +82,17 @@ class _AnnotationBuilder(Transformer[Token, tuple[str, Annotation | None]]):
         return AnnotationLeaf(str(children[0]))
 
     def seq_op(self, children: list[_AnnotationChild]) -> AnnotationOp:
-        return _merge_annotation(";", map(_annotation, children))
+        return _spliced(AnnotationOp, ";", map(_annotation, children))
 
     def par_op(self, children: list[_AnnotationChild]) -> AnnotationOp:
-        return _merge_annotation("#", map(_annotation, children))
+        return _spliced(AnnotationOp, "#", map(_annotation, children))
 
     def fallback_op(self, children: list[_AnnotationChild]) -> AnnotationOp:
-        return _merge_annotation("FALLBACK", map(_annotation, children))
+        return _spliced(AnnotationOp, "FALLBACK", map(_annotation, children))
 
 
 class _ConditionBuilder(Transformer[Token, Condition | None]):
-    """Turns the ``condition.lark`` parse into a :data:`Condition` (or None) while parsing."""
+    """Turns the ``condition.lark`` parse into a :data:`Condition` (or None)."""
 
     def start(self, children: list[_ConditionChild]) -> Condition | None:
         condition = children[0]  # None for an empty condition
@@ -112,23 +102,16 @@ class _ConditionBuilder(Transformer[Token, Condition | None]):
         return make_atom(str(children[0]))
 
     def and_op(self, children: list[_ConditionChild]) -> BoolOp:
-        return _merge_condition("&&", map(_condition, children))
+        return _spliced(BoolOp, "&&", map(_condition, children))
 
     def or_op(self, children: list[_ConditionChild]) -> BoolOp:
-        return _merge_condition("||", map(_condition, children))
+        return _spliced(BoolOp, "||", map(_condition, children))
 
 
-@lru_cache(maxsize=None)
-def _annotation_parser() -> Lark:
-    # lexer="basic" (not the contextual lexer) so that FALLBACK is always the keyword, even
-    # among description words, exactly like the original flex lexer.  The tables come from the
-    # cache; the tree is transformed after the parse (a cached parser carries no transformer).
-    return cached_lalr_parser("annotation.lark", lexer="basic", maybe_placeholders=True)
-
-
-@lru_cache(maxsize=None)
-def _condition_parser() -> Lark:
-    return cached_lalr_parser("condition.lark", lexer="basic", maybe_placeholders=True)
+# lexer="basic" (not the contextual lexer) so that FALLBACK is always the keyword, even among
+# description words, exactly like the original flex lexer.
+ANNOTATIONS = EmbeddedLanguage("annotation.lark", _AnnotationBuilder, lexer="basic", maybe_placeholders=True)
+CONDITIONS = EmbeddedLanguage("condition.lark", _ConditionBuilder, lexer="basic", maybe_placeholders=True)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -179,45 +162,6 @@ def _expected_text(expected: Iterable[str], names: dict[str, str], overrides: di
     return _join_alternatives([table[t] for t in table if t in wanted])
 
 
-def _error_position(err: UnexpectedInput, text: str) -> int:
-    """0-based offset of the offending token (the end of the text for an early end of input)."""
-    if isinstance(err, UnexpectedToken):
-        if err.token.type == "$END":
-            return len(text)
-        return err.token.start_pos or 0
-    if isinstance(err, UnexpectedEOF):
-        return len(text)
-    if isinstance(err, UnexpectedCharacters):
-        return err.pos_in_stream or 0  # always set by the lexer that raises it
-    position: int | None = getattr(err, "pos_in_stream", 0)
-    return position or 0
-
-
-def _expected_terminals(parser: Lark, text: str, err: UnexpectedInput, pos: int) -> set[str]:
-    """Terminals that can really come at ``pos`` (where the parse failed).
-
-    LALR detects an error only after reducing with the offending look-ahead, and its states
-    share look-aheads from other contexts, so ``err.expected`` is both too wide (']' inside
-    parentheses) and too narrow ('#' after the reduction to ';').  Errors are rare, so replay
-    the tokens before ``pos`` and ask the interactive parser which terminals it accepts there.
-    """
-    try:
-        interactive = parser.parse_interactive(text)
-        for token in interactive.iter_parse():  # yields each token before feeding it
-            if token.start_pos is not None and token.start_pos >= pos:
-                break
-        # lark leaves InteractiveParser.accepts unannotated; it returns the terminal names
-        accepts = cast(Callable[[], set[str]], interactive.accepts)
-        return set(accepts())
-    except UnexpectedInput:
-        pass
-    if isinstance(err, (UnexpectedToken, UnexpectedEOF)):
-        return set(err.expected)
-    if isinstance(err, UnexpectedCharacters):
-        return set(err.allowed or ())
-    return set()
-
-
 # ---------------------------------------------------------------------------------------------
 # Runtime annotations
 
@@ -234,14 +178,13 @@ def parse_node_text(text: str) -> tuple[str, Annotation | None]:
     (the column then counts from its ``[``), else the whole text.
     """
     try:
-        # the builder's start() gives the result: the transformed tree
-        return _AnnotationBuilder().transform(_annotation_parser().parse(text))
+        return ANNOTATIONS.parse(text)
     except UnexpectedInput as err:
         raise _annotation_error(text, err) from None
 
 
 def _annotation_error(text: str, err: UnexpectedInput) -> MissionError:
-    pos = _error_position(err, text)
+    pos = error_position(err, text)
     bracket = text.find("[")  # '[' is always a token: no skipped character can be '['
     colon = text.find(":")
     if bracket != -1 and pos >= bracket:
@@ -249,7 +192,7 @@ def _annotation_error(text: str, err: UnexpectedInput) -> MissionError:
     else:
         shown, column = text, pos + 1
         name = "a goal id such as G1" if colon == -1 or pos <= colon else "a description word"
-    terminals = _expected_terminals(_annotation_parser(), text, err, pos)
+    terminals = ANNOTATIONS.terminals_accepted_at(text, err, pos)
     expected = _expected_text(terminals, _ANNOTATION_TERMINALS, {"NAME": name})
     return MissionError(f"Parse error in runtime annotation: {shown}: column {column}: expected {expected}")
 
@@ -297,10 +240,10 @@ def make_atom(text: str) -> Atom:
 def _parse_condition_in(source: str, what: str, shown: str, offset: int) -> Condition | None:
     """Parse ``source``, which sits at ``offset`` inside ``shown`` (for error columns)."""
     try:
-        return _ConditionBuilder().transform(_condition_parser().parse(source))
+        return CONDITIONS.parse(source)
     except UnexpectedInput as err:
-        pos = _error_position(err, source)
-        terminals = _expected_terminals(_condition_parser(), source, err, pos)
+        pos = error_position(err, source)
+        terminals = CONDITIONS.terminals_accepted_at(source, err, pos)
         expected = _expected_text(terminals, _CONDITION_TERMINALS, {})
         column = offset + pos + 1
         raise MissionError(

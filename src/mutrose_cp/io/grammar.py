@@ -1,4 +1,5 @@
-"""The packaged lark grammars, with their parsers' LALR tables cached between runs.
+"""The packaged lark grammars, with their parsers' LALR tables cached between runs, and
+:class:`EmbeddedLanguage`, the base of the readers that turn one grammar's parse into values.
 
 Building the HDDL parser's tables takes about 0.2 s, most of a small mission's whole run, and
 each expression grammar's 0.017 s; loading them back takes 0.02 s and 0.003 s.  The tables are saved in the user's cache folder
@@ -19,12 +20,15 @@ import sys
 import tempfile
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from functools import cached_property
+from typing import Any, Callable, Generic, TypeVar, cast
 
 import lark
-from lark import Lark
+from lark import Lark, Token, Transformer
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 CACHE_ENV = "MUTROSE_CP_CACHE"
+Result = TypeVar("Result")
 
 
 def grammar_text(name: str) -> str:
@@ -100,3 +104,66 @@ def _save(parser: Lark, path: Path) -> None:
             os.unlink(tmp)
         except OSError:
             pass
+
+
+class EmbeddedLanguage(Generic[Result]):
+    """One packaged grammar read into values: its LALR parser, built once and cached between
+    runs, and the lark Transformer that turns a parse tree into the model's value.
+
+    The readers of the goal model's expression languages share it (AI-Planning/pddl's
+    ``parser/base.py`` is the pattern): a language is its grammar, its options and its builder,
+    and a syntax error is turned into the terminals that could have come where it failed."""
+
+    def __init__(self, grammar: str, builder: Callable[[], Transformer[Token, Result]], **options: Any) -> None:
+        self.grammar = grammar
+        self.builder = builder
+        self.options = options
+
+    @cached_property
+    def parser(self) -> Lark:
+        """The parser, built on first use: a call that never reads this language never pays."""
+        return cached_lalr_parser(self.grammar, **self.options)
+
+    def parse(self, text: str) -> Result:
+        """The value of ``text``; lark's :class:`UnexpectedInput` on a syntax error.
+
+        The tree is transformed after the parse: a cached parser carries no transformer."""
+        return self.builder().transform(self.parser.parse(text))
+
+    def terminals_accepted_at(self, text: str, err: UnexpectedInput, position: int) -> set[str]:
+        """Terminals that can really come at ``position`` (where the parse of ``text`` failed).
+
+        LALR detects an error only after reducing with the offending look-ahead, and its states
+        share look-aheads from other contexts, so ``err.expected`` is both too wide (']' inside
+        parentheses) and too narrow ('#' after the reduction to ';').  Errors are rare, so the
+        tokens before ``position`` are replayed and the interactive parser says which terminals
+        it accepts there."""
+        try:
+            interactive = self.parser.parse_interactive(text)
+            for token in interactive.iter_parse():  # yields each token before feeding it
+                if token.start_pos is not None and token.start_pos >= position:
+                    break
+            # lark leaves InteractiveParser.accepts unannotated; it returns the terminal names
+            accepts = cast(Callable[[], set[str]], interactive.accepts)
+            return set(accepts())
+        except UnexpectedInput:
+            pass
+        if isinstance(err, (UnexpectedToken, UnexpectedEOF)):
+            return set(err.expected)
+        if isinstance(err, UnexpectedCharacters):
+            return set(err.allowed or ())
+        return set()
+
+
+def error_position(err: UnexpectedInput, text: str) -> int:
+    """0-based offset in ``text`` of the offending token (its end for an early end of input)."""
+    if isinstance(err, UnexpectedToken):
+        if err.token.type == "$END":
+            return len(text)
+        return err.token.start_pos or 0
+    if isinstance(err, UnexpectedEOF):
+        return len(text)
+    if isinstance(err, UnexpectedCharacters):
+        return err.pos_in_stream or 0  # always set by the lexer that raises it
+    position: int | None = getattr(err, "pos_in_stream", 0)
+    return position or 0
