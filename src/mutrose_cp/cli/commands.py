@@ -14,7 +14,7 @@ import shutil
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING
 
 from ..output.counts import shown_count
 from ..errors import MissionError, Problem
@@ -22,6 +22,7 @@ from ..interrupt import phase
 from ..mission import Mission
 from ..io.mission_files import find_mission_files
 from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
+from .flow import expanded, load_mission, refuse_outputs, report_warnings
 from .process import keep_until_exit
 from ..solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from ..solve.optimize import CostModel
@@ -111,8 +112,8 @@ def cmd_check(args: argparse.Namespace) -> int:
         from ..allocate.fleet import Fleet
 
         _check_fleet(mission, Fleet.read(args.fleet))
-    if not args.strict:
-        _warn(args, mission)
+    if not args.strict and not args.quiet:
+        report_warnings(mission)
     _check_domain(args, mission)
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "check", "valid": True, "task_instances": len(exp.instances),
@@ -161,14 +162,13 @@ def cmd_allocate(args: argparse.Namespace) -> int:
         from ..allocate.gantt import gantt_format
 
         gantt_format(args.gantt)  # and matplotlib, before any work
-    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
-    _warn(args, mission)
+    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
     fleet = Fleet.read(args.fleet)
     travel = _check_fleet(mission, fleet)
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     schedule_path = Path(args.schedule) if args.schedule else _default_schedule(out_path)
     _refuse_two_on_stdout(args, out_path, schedule_path)
-    _refuse_inputs_as_output((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
+    refuse_outputs((out_path, schedule_path, args.gantt), mission, (hddl, gm, cfg, Path(args.fleet)))
     options = AllocationOptions(objective, args.time_limit, args.workers, args.seed, work_limit=args.work_limit,
                                 counted_from=start)
     progress = _AllocationProgress(not args.quiet, objective.name)
@@ -315,22 +315,19 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         raise MissionError("-o - writes the output to standard output: drop --json-summary, which prints there too")
     if args.sample is not None and (args.optimize or args.limit != DEFAULT_LIMIT):
         raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
-    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
     mission.progress = _Progress(not args.quiet).stage
-    _warn(args, mission)
     # where and how the output goes is settled, and refused if unsafe, before any work
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     file_type = _output_format(args, mission)
     if args.json_style == "standard" and file_type != "json":
         raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
                            "drop --json-style or write JSON (--format json)")
-    _refuse_inputs_as_output((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg, args.costs),
+    refuse_outputs((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg, args.costs),
                              folders=(args.ihtn,))
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
     progress = _Progress(not args.quiet, f"mission decompositions: {label}")
-    with phase("expanding the mission"):
-        tg = mission.task_graph
-        constraints = mission.constraints
+    tg, constraints = expanded(mission)
     request = _request(args)
     if not tg.tasks() and not args.quiet:
         print("warning: the mission has no task instances (no entity of the world matched its queries): "
@@ -405,9 +402,8 @@ def cmd_graph(args: argparse.Namespace) -> int:
 
     hddl, gm, cfg, _folder = _inputs(args)
     start = time.perf_counter()
-    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
-    _warn(args, mission)
-    _refuse_inputs_as_output(render_targets(args.output), mission, (hddl, gm, cfg))
+    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
+    refuse_outputs(render_targets(args.output), mission, (hddl, gm, cfg))
     result = render(view_dot(mission, args.view, args.index), args.output)
     if result.message:
         print(result.message, file=sys.stderr)
@@ -418,30 +414,10 @@ def cmd_graph(args: argparse.Namespace) -> int:
     return 0
 
 
-def _warn(args: argparse.Namespace, mission: Mission) -> None:
-    """The warnings of loading now, and those of later stages as they are found."""
-    if not getattr(args, "quiet", False):
-        for w in (*mission.warnings, *mission.initial_state.warnings):
-            print(f"warning: {w}", file=sys.stderr)
-        mission.report_warning = _print_warning
-
-
-def _print_warning(warning: str) -> None:
-    print(f"warning: {warning}", file=sys.stderr)
-
-
-def _refuse_inputs_as_output(outputs: Sequence[Path | str | None], mission: Mission,
-                             inputs: tuple[Path | str | None, ...], folders: Sequence[Path | str | None] = ()) -> None:
-    """Outputs that are inputs of the mission (the world included) or one another, or folders:
-    refused before anything is computed or written (``output_file.refuse_unsafe_outputs``)."""
-    refuse_unsafe_outputs(outputs, (*inputs, mission.world_path), folders)
-
-
 def cmd_count(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = _inputs(args)
     start = time.perf_counter()
-    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
-    _warn(args, mission)
+    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
     with phase("expanding the mission"):
         _ = mission.constraints
     with phase("solving"):

@@ -43,7 +43,6 @@ from typing import IO, TYPE_CHECKING, Iterable, Mapping, Sequence
 
 from ..interrupt import phase, signal_handlers
 from ..io.text import MB, input_limit
-from ..output.files import refuse_unsafe_outputs
 from .process import (
     FAILURES,
     Failure,
@@ -145,13 +144,13 @@ def run(inv: Invocation, out: IO[str] | None = None) -> int:
     """Decompose as the original does: the output file (or iHTN files) and, on ``out``, what the
     original prints there: its lexers' echo (in every mode) around the ``-p`` blocks or the
     ``-v`` trace."""
+    from .flow import expanded
     from ..output.lexer_echo import LexerEcho
     from ..output.builder import OutputModel
 
     out = out if out is not None else sys.stdout
     mission = _load(inv)
-    with phase("expanding the mission"):
-        tg, constraints = mission.task_graph, mission.constraints
+    tg, constraints = expanded(mission)
     echo = LexerEcho.of(mission.goal_model, mission.expansion.rat)
     echo.print_head(out)  # the full stdio buffers the original wrote while reading the goal model
     if inv.verbose or inv.pretty:
@@ -199,16 +198,14 @@ def _print_decompositions(inv: Invocation, tg: TaskGraph, constraints: Sequence[
 
 
 def _load(inv: Invocation) -> Mission:
-    """The mission, its warnings on stderr, its output checked against its inputs."""
-    from ..mission import Mission
+    """The mission, its warnings on stderr, its output checked against its inputs (the shared
+    steps of :mod:`.flow`, imported when the command runs: a usage error never loads them)."""
+    from .flow import load_mission, refuse_outputs
 
     hddl, gm, cfg = inv.files
-    mission = Mission.load(hddl, gm, cfg, lenient_xml=True)  # the original repairs XML silently
-    for warning in (*mission.warnings, *mission.initial_state.warnings):
-        print(f"warning: {warning}", file=sys.stderr)
-    mission.report_warning = lambda warning: print(f"warning: {warning}", file=sys.stderr)
+    mission = load_mission(hddl, gm, cfg, lenient_xml=True)  # the original repairs XML silently
     # the original would overwrite an input named as its output: refused, before any work
-    refuse_unsafe_outputs((None if inv.ihtn else mission.output_path(),), (*inv.files, mission.world_path))
+    refuse_outputs((None if inv.ihtn else mission.output_path(),), mission, inv.files)
     return mission
 
 
