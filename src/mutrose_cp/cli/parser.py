@@ -13,48 +13,64 @@ from ..output.ihtn import DEFAULT_MAX_FILES
 from .option_types import count_option, input_file, output_file, output_folder, seconds, work_units
 from ..solve.decompose import DEFAULT_LIMIT
 
-
-
-
 def build_parser() -> argparse.ArgumentParser:
-    from ..allocate.options import MAX_SEED, MAX_WORKERS
-
+    """The whole command line: one sub-parser per command, each added by its own function."""
     parser = argparse.ArgumentParser(
         prog="mutrose-cp",
         description="Decompose MutRoSe multi-robot missions (goal model + HDDL + configuration + world).",
     )
     parser.add_argument("--version", action="version", version=f"mutrose-cp {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    add_check_parser(sub)
+    add_decompose_parser(sub)
+    add_allocate_parser(sub)
+    add_count_parser(sub)
+    add_validate_parser(sub)
+    add_compare_parser(sub)
+    add_graph_parser(sub)
+    add_export_hddl_parser(sub)
+    add_batch_parser(sub)
+    return parser
 
-    def reading(p: argparse.ArgumentParser) -> None:
-        """How the inputs are read: XML repair and the size bound."""
-        p.add_argument("--lenient-xml", action="store_true",
-                       help="read XML whose repair changes which records exist or how they nest, as the original "
-                            "does (with warnings) instead of refusing it")
-        p.add_argument("--max-input-mb", type=count_option(1), default=256, metavar="MB",
-                       help="refuse input files larger than this (default 256)")
 
-    def mission_inputs(p: argparse.ArgumentParser) -> None:
-        """Which mission: its three files, or its folder and the files to pick there."""
-        p.add_argument("inputs", nargs="+", metavar="INPUT",
-                       help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
-        p.add_argument("--config", type=input_file, help="in a mission folder with several configurations, the one to use")
-        p.add_argument("--hddl", type=input_file, help="in a mission folder with several HDDL files, the one to use")
-        p.add_argument("--gm", type=input_file, help="in a mission folder with several goal models, the one to use")
+def reading(p: argparse.ArgumentParser) -> None:
+    """How the inputs are read: XML repair and the size bound."""
+    p.add_argument("--lenient-xml", action="store_true",
+                   help="read XML whose repair changes which records exist or how they nest, as the original "
+                        "does (with warnings) instead of refusing it")
+    p.add_argument("--max-input-mb", type=count_option(1), default=256, metavar="MB",
+                   help="refuse input files larger than this (default 256)")
 
-    def common(p: argparse.ArgumentParser) -> None:
-        mission_inputs(p)
-        reading(p)
-        p.add_argument("--world", metavar="FILE", type=input_file,
-                       help="read the world knowledge from FILE instead of the configuration's world_db.path")
-        p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
-        p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
 
+def mission_inputs(p: argparse.ArgumentParser) -> None:
+    """Which mission: its three files, or its folder and the files to pick there."""
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="HDDL GM CONFIG, or one mission folder with hddl/ gm/ configuration/ knowledge/")
+    p.add_argument("--config", type=input_file, help="in a mission folder with several configurations, the one to use")
+    p.add_argument("--hddl", type=input_file, help="in a mission folder with several HDDL files, the one to use")
+    p.add_argument("--gm", type=input_file, help="in a mission folder with several goal models, the one to use")
+
+
+def common(p: argparse.ArgumentParser) -> None:
+    """The options of every command that reads one mission."""
+    mission_inputs(p)
+    reading(p)
+    p.add_argument("--world", metavar="FILE", type=input_file,
+                   help="read the world knowledge from FILE instead of the configuration's world_db.path")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress and no summary on stderr")
+    p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
+
+
+def add_check_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``check``: validate the mission inputs and report every problem found."""
     p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
     common(p)
     p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
     p.add_argument("--fleet", metavar="FLEET.json", type=input_file, help="also check a fleet file against the mission")
 
+
+def add_decompose_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``decompose``: decompose the mission and write the output file."""
     p = sub.add_parser("decompose", help="decompose the mission and write the output file")
     common(p)
     p.add_argument("-o", "--output", type=output_file,
@@ -83,6 +99,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--ihtn-max", type=count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
                    help="--ihtn: refuse (exit 2) an export of more than N files (default 10000)")
 
+
+def add_allocate_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``allocate``: choose the decomposition, the robots and the schedule together."""
+    from ..allocate.options import MAX_SEED, MAX_WORKERS
+
     p = sub.add_parser("allocate", help="choose the decomposition, the robots and the schedule together")
     common(p)
     p.add_argument("--fleet", required=True, metavar="FLEET.json", type=input_file,
@@ -104,13 +125,22 @@ def build_parser() -> argparse.ArgumentParser:
                    help="CP-SAT search threads (default 1: the same schedule on every finished run)")
     p.add_argument("--seed", type=count_option(0, MAX_SEED), default=0, help="CP-SAT random seed (default 0)")
 
+
+def add_count_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``count``: print the exact number of valid mission decompositions."""
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
     common(p)
 
+
+def add_validate_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``validate``: check an output file (ours or the original's) against the mission."""
     p = sub.add_parser("validate", help="check an output file (ours or the original's) against the mission")
     common(p)
     p.usage = "mutrose-cp validate [-h] [--config CONFIG] [-q] [--json-summary] (HDDL GM CONFIG | MISSION_DIR) OUTPUT"
 
+
+def add_compare_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``compare``: run both decomposers (and the original tool) on the mission, each in its ."""
     from ..compare.run import DEFAULT_LIMIT as COMPARE_LIMIT, DEFAULT_TIME_LIMIT
 
     p = sub.add_parser("compare", help="run both decomposers (and the original tool) on the mission, each in its "
@@ -129,6 +159,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="FILE", type=output_file, help="bar chart of time and memory: FILE.png, .svg or .pdf (needs matplotlib)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
 
+
+def add_graph_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``graph``: draw the expanded goal model, the Task Graph or one decomposition."""
     p = sub.add_parser("graph", help="draw the expanded goal model, the Task Graph or one decomposition")
     common(p)
     p.add_argument("--view", choices=("goal-model", "task-graph", "decomposition"), default="task-graph")
@@ -136,6 +169,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, type=output_file,
                    help="FILE.svg, FILE.png (needs graphviz) or FILE.dot")
 
+
+def add_export_hddl_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``export-hddl``: write the domain (and the mission's problem) as standard HDDL."""
     p = sub.add_parser("export-hddl", help="write the domain (and the mission's problem) as standard HDDL")
     p.add_argument("input", metavar="INPUT", help="the HDDL domain, or a mission folder")
     p.add_argument("-o", "--output", required=True, metavar="OUT.hddl", type=output_file,
@@ -148,6 +184,3 @@ def build_parser() -> argparse.ArgumentParser:
                                                          "when the mission has no problem form")
     reading(p)
     p.add_argument("-q", "--quiet", action="store_true", help="no warnings and no summary on stderr")
-
-    add_batch_parser(sub)
-    return parser
