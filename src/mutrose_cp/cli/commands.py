@@ -112,6 +112,8 @@ def cmd_check(args: argparse.Namespace) -> int:
         from ..allocate.fleet import Fleet
 
         _check_fleet(mission, Fleet.read(args.fleet))
+    if args.properties or args.property:
+        _check_properties(args, mission)
     if not args.strict and not args.quiet:
         report_warnings(mission)
     _check_domain(args, mission)
@@ -121,6 +123,18 @@ def cmd_check(args: argparse.Namespace) -> int:
              f"ok: {hddl.name}, {gm.name}, {cfg.name} are valid ({len(exp.instances)} task instances, "
              f"{elapsed:.2f} s)", mission)
     return 0
+
+
+def _check_properties(args: argparse.Namespace, mission: Mission) -> None:
+    """The properties' syntax, and the names they use against the domain (exit 2 on a problem)."""
+    from ..io.properties import command_line_properties, read_properties
+    from ..pipeline.property_checks import property_problems
+
+    properties = [*(read_properties(args.properties) if args.properties else ()),
+                  *command_line_properties(args.property)]
+    problems = property_problems(properties, mission.domain)
+    if problems:
+        raise MissionError(problems)
 
 
 def _check_domain(args: argparse.Namespace, mission: Mission) -> None:

@@ -67,6 +67,10 @@ def add_check_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]")
     common(p)
     p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
     p.add_argument("--fleet", metavar="FLEET.json", type=input_file, help="also check a fleet file against the mission")
+    p.add_argument("--properties", metavar="FILE", type=input_file,
+                   help="also check a properties file (one 'name: quantifier formula' per line) against the mission")
+    p.add_argument("--property", action="append", default=[], metavar="PROPERTY",
+                   help="also check this property (repeatable), e.g. 'never uses(action drop-item)'")
 
 
 def add_decompose_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
