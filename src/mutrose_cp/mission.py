@@ -40,6 +40,8 @@ if TYPE_CHECKING:  # the solvers import OR-Tools, which takes a while: loaded wh
     from .solve.decompose import DecompositionRequest, DecompositionResult
     from .solve.embedding import DecompositionModel
     from .solve.encoding import Encoding
+    from .solve.verify import Verdict
+    from .model.properties import Property
 
 __all__ = ["Mission", "find_mission_files", "resolve_config_path", "resolve_output_path", "world_file"]
 
@@ -111,6 +113,14 @@ class Mission(MissionStages):
         from .solve.decompose import DecompositionRequest, decompose  # deferred: start-up time
 
         return decompose(self, request if request is not None else DecompositionRequest(), progress)
+
+    def verify(self, prop: Property) -> Verdict:
+        """Whether ``prop`` holds over every valid mission decomposition (``always``, ``never``),
+        some (``some``), or for how many (``count``), with a witness decomposition; decided
+        exactly through the components (see ``solve/verify.py``)."""
+        from .solve.verify import verify  # deferred: start-up time
+
+        return verify(prop, self.decomposition_space(), self.task_graph, self.domain)
 
     def decomposition_model(self) -> DecompositionModel:
         """The whole decomposition space as one CP-SAT model, for embedding (see ``solve/embedding.py``)."""

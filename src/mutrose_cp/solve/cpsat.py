@@ -213,15 +213,23 @@ class DecompositionSpace:
         for suffix in self._odometer(self._choices(), 0):
             yield sorted(itertools.chain(self.fixed, suffix))
 
+    def alternatives(self, component: Component) -> Alternatives | None:
+        """One component's solutions as sorted decomposition vertices: listed, or lazily from
+        its layers; None for a component that was only counted."""
+        if component.solutions is not None:
+            return Listed(component.solutions, self.var_to_dec)
+        if component.layers is not None:
+            return FromLayers(component.layers, self.var_to_dec)
+        return None
+
     def _choices(self) -> list[Alternatives]:
         """Each component's solutions as sorted decomposition vertices: listed, or lazily from
         its layers."""
         choices: list[Alternatives] = []
         for c in self.components:
-            if c.solutions is not None:
-                choices.append(Listed(c.solutions, self.var_to_dec))
-            elif c.layers is not None:
-                choices.append(FromLayers(c.layers, self.var_to_dec))
+            alternatives = self.alternatives(c)
+            if alternatives is not None:
+                choices.append(alternatives)
             else:
                 raise MissionError(f"a part of the mission has more than {ENUMERATION_CAP} alternative "
                                    "decompositions on its own: they can be counted (count) but not listed")

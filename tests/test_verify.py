@@ -1,0 +1,143 @@
+"""Properties decided over every valid decomposition (solve/verify.py), checked against brute
+force: every decomposition the exploratory algorithm lists, evaluated one by one."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Iterable
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from mutrose_cp.errors import MissionError, NoDecompositionError
+from mutrose_cp.io.properties import command_line_properties
+from mutrose_cp.mission import Mission
+from mutrose_cp.model.properties import Formula, Implies, Junction, Not, TaskPattern, Uses
+from missiongen import load_mission, missions
+
+EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "hospital-disinfection"
+EXAMPLES = int(os.environ.get("MUTROSE_VERIFY_EXAMPLES", "60"))
+
+
+def hospital() -> Mission:
+    return Mission.load(*(next((EXAMPLE / d).iterdir()) for d in ("hddl", "gm", "configuration")))
+
+
+def verdict(mission: Mission, text: str):
+    return mission.verify(command_line_properties([text])[0])
+
+
+# --- brute force ------------------------------------------------------------------------------
+
+def used(mission: Mission, decomposition: Iterable[int]) -> set[tuple[str, str]]:
+    """What one mission decomposition uses, read straight from its task decompositions."""
+    out: set[tuple[str, str]] = set()
+    for v in decomposition:
+        d = mission.task_graph.decomposition(v).decomposition
+        out |= {("task", d.instance.name), ("decomposition", d.id)}
+        out |= {("action", s.name) for s in d.path.actions}
+        out |= {("capability", c) for s in d.path.actions for c in s.capabilities}
+        stack = [d.path.tree]
+        while stack:
+            node = stack.pop()
+            out |= {("method", node.name)} if node.kind == "method" else set()
+            stack.extend(node.children)
+    return out
+
+
+def holds(formula: Formula, uses: set[tuple[str, str]]) -> bool:
+    if isinstance(formula, Not):
+        return not holds(formula.operand, uses)
+    if isinstance(formula, Junction):
+        results = [holds(f, uses) for f in formula.operands]
+        return all(results) if formula.op == "and" else any(results)
+    if isinstance(formula, Implies):
+        return not holds(formula.premise, uses) or holds(formula.conclusion, uses)
+    assert isinstance(formula, Uses)
+    target = formula.target
+    key = ("task", target.name) if isinstance(target, TaskPattern) else target
+    return key in uses
+
+
+def brute_force(mission: Mission, text: str) -> tuple[str, int, int]:
+    prop = command_line_properties([text])[0]
+    try:
+        listed = mission.exploratory()
+    except NoDecompositionError:
+        listed = []
+    if not listed:
+        return "vacuous", 0, 0
+    count = sum(holds(prop.formula, used(mission, d)) for d in listed)
+    status = {"count": "count", "always": "holds" if count == len(listed) else "fails",
+              "never": "holds" if count == 0 else "fails", "some": "holds" if count else "fails"}[prop.quantifier]
+    return status, count, len(listed)
+
+
+@st.composite
+def missions_with_properties(draw):
+    spec = draw(missions())
+    mission = load_mission(spec)
+    domain = mission.domain
+    names = ([("task", t.name) for t in domain.tasks] + [("method", m.name) for m in domain.methods]
+             + [("action", a.name) for a in domain.actions]
+             + [("capability", c) for a in domain.actions for c in a.capabilities])
+    atom = st.sampled_from(names).map(lambda n: f"uses(task {n[1]})" if n[0] == "task" else f"uses({n[0]} {n[1]})")
+    formula = st.recursive(atom, lambda inner: st.one_of(
+        inner.map(lambda f: f"not {f}"),
+        st.tuples(inner, st.sampled_from(["and", "or", "implies"]), inner).map(lambda t: f"({t[0]} {t[1]} {t[2]})")),
+        max_leaves=5)
+    quantifier = draw(st.sampled_from(["always", "some", "never", "count"]))
+    return mission, f"{quantifier} {draw(formula)}"
+
+
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck))
+@given(missions_with_properties())
+def test_every_verdict_and_count_agrees_with_brute_force(case):
+    mission, text = case
+    if mission.decomposition_space().count > 5000:
+        return
+    expected = brute_force(mission, text)
+    found = verdict(mission, text)
+    assert (found.status, found.count, found.total) == expected, text
+    if found.witness is not None:  # a witness is a valid decomposition that shows the verdict
+        assert sorted(found.witness) in [sorted(d) for d in mission.exploratory()]
+        shown = holds(found.property.formula, used(mission, found.witness))
+        assert shown == (found.property.quantifier != "always")
+
+
+# --- the bundled example, by hand -------------------------------------------------------------
+
+def test_hospital_verdicts():
+    mission = hospital()
+    opens = verdict(mission, "some uses(method uv-after-opening-door)")
+    assert (opens.status, opens.count, opens.total) == ("holds", 18, 36)
+    assert "uv-after-opening-door" in {n for kind, n in used(mission, opens.witness) if kind == "method"}
+    never = verdict(mission, "never uses(action open-door)")
+    assert (never.status, never.count) == ("fails", 18)
+    assert ("action", "open-door") in used(mission, never.witness)
+    always = verdict(mission, "always uses(task ClearRoom) or not uses(task ClearRoom)")
+    assert (always.status, always.witness) == ("holds", None)
+
+
+def test_variables_bind_per_value():
+    """``?rm`` takes each room of the instances: the property is their conjunction."""
+    mission = hospital()
+    rooms = {str(p.value) for t in mission.expansion.instances if t.name == "ClearRoom" for p in t.parameters
+             if p.hddl_param == "?rm"}
+    assert len(rooms) >= 2
+    per_room = [verdict(mission, f"count uses(task ClearRoom(?r, {room})) implies uses(task UVDisinfection(?u, {room}))")
+                for room in sorted(rooms)]
+    joined = verdict(mission, "count uses(task ClearRoom(?r, ?rm)) implies uses(task UVDisinfection(?u, ?rm))")
+    listed = mission.exploratory()
+    def ok(d, room):
+        instances = [mission.task_graph.decomposition(v).decomposition.instance for v in d]
+        names = {(t.name, {p.hddl_param: str(p.value) for p in t.parameters}.get("?rm")) for t in instances}
+        return ("ClearRoom", room) not in names or ("UVDisinfection", room) in names
+    assert joined.count == sum(all(ok(d, room) for room in rooms) for d in listed)
+    assert all(v.count == sum(ok(d, room) for d in listed) for v, room in zip(per_room, sorted(rooms)))
+
+
+def test_atoms_not_decided_yet_are_refused_by_name():
+    with pytest.raises(MissionError, match="property property-1: cannot be verified: before atoms"):
+        verdict(hospital(), "always before(task ClearRoom, task UVDisinfection)")
