@@ -112,6 +112,7 @@ BASE = {
     "graph": lambda m: ["graph", str(m), "-q"],
     "export-hddl": lambda m: ["export-hddl", str(m), "-q"],
     "compare": lambda m: ["compare", str(m), "-q"],
+    "verify": lambda m: ["verify", str(m), "--property", "count uses(decomposition AT1_1|1)", "-q"],
 }
 # options the command needs, unless the test gives them
 REQUIRED = {"graph": ("--output", "graph.dot"), "export-hddl": ("--output", "out.hddl")}
@@ -128,7 +129,7 @@ def test_every_output_option_refuses_an_input(mission: Path, capsys, command: st
     suffix = SUFFIX.get((command, option), SUFFIX.get(option, ".xml"))
     world = _world_named(mission, "world" + suffix)
     before = world.read_bytes()
-    target = world.parent if option == "--ihtn" else world  # a folder that holds an input
+    target = world.parent if option in ("--ihtn", "--witness-dir") else world  # a folder that holds an input
     argv = BASE[command](mission) + [option, str(target)]
     required = REQUIRED.get(command)
     if required is not None and required[0] != option:

@@ -2,6 +2,7 @@
 force: every decomposition the exploratory algorithm lists, evaluated one by one."""
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 from typing import Iterable
@@ -141,3 +142,80 @@ def test_variables_bind_per_value():
 def test_atoms_not_decided_yet_are_refused_by_name():
     with pytest.raises(MissionError, match="property property-1: cannot be verified: before atoms"):
         verdict(hospital(), "always before(task ClearRoom, task UVDisinfection)")
+
+
+# --- mutrose-cp verify, as a user runs it -----------------------------------------------------
+
+import shutil  # noqa: E402
+
+from mutrose_cp.cli.program import main  # noqa: E402
+
+OPENS = "opens: some uses(method uv-after-opening-door)"
+NO_DOOR = "no-door: never uses(action open-door)"
+SPRAY = "spray: count uses(task SprayDisinfection)"
+
+
+def copy_of_example(tmp_path: Path) -> Path:
+    folder = tmp_path / "mission"
+    shutil.copytree(EXAMPLE, folder)
+    return folder
+
+
+def test_verify_statuses_witnesses_and_exit(tmp_path, capsys):
+    folder, witnesses = copy_of_example(tmp_path), tmp_path / "witnesses"
+    assert main(["verify", str(folder), "--property", OPENS, "--property", SPRAY, "-q"]) == 0
+    assert capsys.readouterr().out.splitlines() == [
+        "opens: holds, 18 of 36 valid decompositions satisfy the formula", "spray: 28 of 36 valid decompositions"]
+    args = ["verify", str(folder), "--property", OPENS, "--property", NO_DOOR, "--witness-dir", str(witnesses), "-q"]
+    assert main(args) == 1
+    out = capsys.readouterr().out
+    assert f"no-door: fails, 18 of 36 valid decompositions satisfy the formula (witness {witnesses / 'no-door.json'})" in out
+    assert sorted(p.name for p in witnesses.iterdir()) == ["no-door.json", "opens.json"]
+    for witness in witnesses.iterdir():  # each is one valid decomposition of the mission
+        assert main(["validate", str(folder), str(witness), "-q"]) == 0
+    first = (witnesses / "no-door.json").read_bytes()
+    assert main(args) == 1 and (witnesses / "no-door.json").read_bytes() == first  # deterministic
+
+
+def test_verify_json_summary(tmp_path, capsys):
+    assert main(["verify", str(EXAMPLE), "--property", SPRAY, "--json-summary", "-q"]) == 0
+    summary = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert summary["properties"] == [{"name": "spray", "property": "count uses(task SprayDisinfection)",
+                                      "status": "count", "count": "28", "total": "36", "witness": None}]
+
+
+def test_verify_without_decompositions_is_vacuous(tmp_path, capsys):
+    folder = copy_of_example(tmp_path)
+    hddl = next((folder / "hddl").iterdir())
+    hddl.write_text(hddl.read_text().replace(
+        "        :task (ClearRoom ?r ?rm)\n",
+        "        :task (ClearRoom ?r ?rm)\n        :precondition (and (cleared ?rm) (not (cleared ?rm)))\n"))
+    assert main(["verify", str(folder), "--property", NO_DOOR, "-q"]) == 3
+    assert "no-door: vacuous" in capsys.readouterr().out
+
+
+def test_verify_bad_input(tmp_path, capsys):
+    assert main(["verify", str(EXAMPLE), "-q"]) == 2
+    assert "verify needs a property" in capsys.readouterr().err
+    assert main(["verify", str(EXAMPLE), "--property", "a: some uses(task A)", "--property", "a: never uses(task A)"]) == 2
+    assert "property a is given twice (--property 1 and --property 2)" in capsys.readouterr().err
+    assert main(["verify", str(EXAMPLE), "--property", "some uses(task"]) == 2
+    assert "--property 1:15:" in capsys.readouterr().err
+
+
+def test_witnesses_never_overwrite_inputs(tmp_path, capsys):
+    folder = copy_of_example(tmp_path)
+    gm = next((folder / "gm").iterdir())
+    before = gm.read_bytes()
+    named = f"{gm.stem}: some uses(method uv-after-opening-door)"
+    assert main(["verify", str(folder), "--property", named, "--witness-dir", str(folder / "gm"), "-q"]) == 2
+    assert gm.read_bytes() == before
+    assert "the output folder holds the input" in capsys.readouterr().err
+
+
+def test_witnesses_are_written_all_or_nothing(tmp_path, capsys):
+    folder, witnesses = copy_of_example(tmp_path), tmp_path / "witnesses"
+    (witnesses / "no-door.json").mkdir(parents=True)  # the second witness cannot be written
+    assert main(["verify", str(folder), "--property", OPENS, "--property", NO_DOOR,
+                 "--witness-dir", str(witnesses), "-q"]) == 2
+    assert sorted(p.name for p in witnesses.iterdir()) == ["no-door.json"]  # opens.json was not kept

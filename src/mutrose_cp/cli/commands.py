@@ -20,9 +20,8 @@ from ..output.counts import shown_count
 from ..errors import MissionError, Problem
 from ..interrupt import phase
 from ..mission import Mission
-from ..io.mission_files import find_mission_files
 from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
-from .flow import expanded, load_mission, refuse_outputs, report_warnings
+from .flow import expanded, load_mission, mission_paths, refuse_outputs, report_warnings
 from .process import keep_until_exit
 from ..solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from ..solve.optimize import CostModel
@@ -31,18 +30,6 @@ if TYPE_CHECKING:
     from ..allocate.fleet import Fleet
     from ..allocate.travel import TravelTimes
 
-
-
-def _inputs(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
-    """(hddl, gm, config, mission folder or None) from ``HDDL GM CONFIG`` or ``MISSION_DIR``."""
-    files = args.inputs
-    if len(files) == 1:
-        hddl, gm, cfg = find_mission_files(files[0], getattr(args, "config", None),
-                                           hddl_name=getattr(args, "hddl", None), gm_name=getattr(args, "gm", None))
-        return hddl, gm, cfg, Path(files[0])
-    if len(files) == 3:
-        return Path(files[0]), Path(files[1]), Path(files[2]), None
-    raise MissionError("expected HDDL GM CONFIG, or a mission folder (hddl/ gm/ configuration/ knowledge/)")
 
 
 class _Progress:
@@ -96,7 +83,7 @@ def _summary(args: argparse.Namespace, data: dict[str, object], line: str, missi
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    hddl, gm, cfg, folder = _inputs(args)
+    hddl, gm, cfg, folder = mission_paths(args)
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     base = (folder if folder is not None else cfg.parent.parent).resolve()
@@ -170,7 +157,7 @@ def cmd_allocate(args: argparse.Namespace) -> int:
     from ..allocate import AllocationOptions, Fleet, Objective
     from ..allocate.output import objective_section, phases_section, summary_line, write_decomposition, write_schedule
 
-    hddl, gm, cfg, folder = _inputs(args)
+    hddl, gm, cfg, folder = mission_paths(args)
     objective = Objective.parse(args.objective)
     if args.gantt:
         from ..allocate.gantt import gantt_format
@@ -265,7 +252,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
         raise MissionError("expected HDDL GM CONFIG OUTPUT, or MISSION_DIR OUTPUT")
     *mission_inputs, output_path = args.inputs
     args.inputs = mission_inputs
-    hddl, gm, cfg, _folder = _inputs(args)
+    hddl, gm, cfg, _folder = mission_paths(args)
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     output = load_decomposition_output(output_path)
     progress = _Progress(not args.quiet, "mission decompositions checked")
@@ -317,7 +304,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     from ..output.builder import OutputModel
     from ..output.ahead import output_while_solving
 
-    hddl, gm, cfg, folder = _inputs(args)
+    hddl, gm, cfg, folder = mission_paths(args)
     start = time.perf_counter()
     if args.algorithm == "exploratory":
         used = ["--" + name for name in cpsat_options(limit=args.limit, sample=args.sample, optimize=args.optimize,
@@ -414,7 +401,7 @@ def _output_format(args: argparse.Namespace, mission: Mission) -> str:
 def cmd_graph(args: argparse.Namespace) -> int:
     from ..output.render import render, render_targets, view_dot
 
-    hddl, gm, cfg, _folder = _inputs(args)
+    hddl, gm, cfg, _folder = mission_paths(args)
     start = time.perf_counter()
     mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
     refuse_outputs(render_targets(args.output), mission, (hddl, gm, cfg))
@@ -429,7 +416,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
 
 
 def cmd_count(args: argparse.Namespace) -> int:
-    hddl, gm, cfg, _folder = _inputs(args)
+    hddl, gm, cfg, _folder = mission_paths(args)
     start = time.perf_counter()
     mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
     with phase("expanding the mission"):
@@ -454,7 +441,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from ..compare.run import CompareRequest, compare
     from ..compare.report import plot_format, render_table, report_json, write_plot
 
-    hddl, gm, cfg, _folder = _inputs(args)
+    hddl, gm, cfg, _folder = mission_paths(args)
     if args.plot:
         plot_format(args.plot)  # before anything runs
         world = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml).world_path

@@ -5,17 +5,33 @@ constraints.  ``mutrose-cp``'s handlers (:mod:`.commands`) and the drop-in ``mut
 is warned, refused or computed first."""
 from __future__ import annotations
 
+import argparse
 import os
 import sys
+from pathlib import Path
 from typing import Sequence
 
+from ..errors import MissionError
 from ..interrupt import phase
+from ..io.mission_files import find_mission_files
 from ..mission import Mission
 from ..model.task_graph import TaskGraph
 from ..output.files import refuse_unsafe_outputs
 from ..pipeline.constraints import Constraints
 
 PathArgument = str | os.PathLike[str]
+
+
+def mission_paths(args: argparse.Namespace) -> tuple[Path, Path, Path, Path | None]:
+    """(hddl, gm, config, mission folder or None) from ``HDDL GM CONFIG`` or ``MISSION_DIR``."""
+    files = args.inputs
+    if len(files) == 1:
+        hddl, gm, cfg = find_mission_files(files[0], getattr(args, "config", None),
+                                           hddl_name=getattr(args, "hddl", None), gm_name=getattr(args, "gm", None))
+        return hddl, gm, cfg, Path(files[0])
+    if len(files) == 3:
+        return Path(files[0]), Path(files[1]), Path(files[2]), None
+    raise MissionError("expected HDDL GM CONFIG, or a mission folder (hddl/ gm/ configuration/ knowledge/)")
 
 
 def print_warning(warning: str) -> None:

@@ -29,6 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_compare_parser(sub)
     add_graph_parser(sub)
     add_export_hddl_parser(sub)
+    add_verify_parser(sub)
     add_batch_parser(sub)
     return parser
 
@@ -188,3 +189,16 @@ def add_export_hddl_parser(sub: "argparse._SubParsersAction[argparse.ArgumentPar
                                                          "when the mission has no problem form")
     reading(p)
     p.add_argument("-q", "--quiet", action="store_true", help="no warnings and no summary on stderr")
+
+
+def add_verify_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``verify``: decide properties over every valid mission decomposition."""
+    p = sub.add_parser("verify", help="decide properties over every valid mission decomposition, with witnesses")
+    common(p)
+    p.add_argument("--property", action="append", default=[], metavar="PROPERTY",
+                   help="a property (repeatable), e.g. 'never uses(action drop-item)' or 'name: count uses(method m)'")
+    p.add_argument("--properties", metavar="FILE", type=input_file,
+                   help="a properties file: one 'name: quantifier formula' per line")
+    p.add_argument("--witness-dir", metavar="DIR", type=output_folder,
+                   help="write a witness decomposition per failing property (and per some that holds) into DIR, "
+                        "as NAME.json or NAME.xml in the output format")

@@ -44,6 +44,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "compare": ("mutrose_cp.cli.commands", "cmd_compare"),
     "graph": ("mutrose_cp.cli.commands", "cmd_graph"),
     "export-hddl": ("mutrose_cp.cli.commands", "cmd_export_hddl"),
+    "verify": ("mutrose_cp.cli.verify", "cmd_verify"),
     "batch": ("mutrose_cp.cli.batch.command", "cmd_batch"),
 }
 
