@@ -140,8 +140,8 @@ def test_variables_bind_per_value():
 
 
 def test_atoms_not_decided_yet_are_refused_by_name():
-    with pytest.raises(MissionError, match="property property-1: cannot be verified: before atoms"):
-        verdict(hospital(), "always before(task ClearRoom, task UVDisinfection)")
+    with pytest.raises(MissionError, match="property property-1: cannot be verified: finally atoms"):
+        verdict(hospital(), "always finally(cleared(Room101))")
 
 
 # --- mutrose-cp verify, as a user runs it -----------------------------------------------------
@@ -219,3 +219,28 @@ def test_witnesses_are_written_all_or_nothing(tmp_path, capsys):
     assert main(["verify", str(folder), "--property", OPENS, "--property", NO_DOOR,
                  "--witness-dir", str(witnesses), "-q"]) == 2
     assert sorted(p.name for p in witnesses.iterdir()) == ["no-door.json"]  # opens.json was not kept
+
+
+def test_before_agrees_with_brute_force_over_the_constraint_order():
+    """``before`` per room, against each listed decomposition checked pair by pair on the
+    transitive closure of the SEQ and FB constraints."""
+    import networkx as nx
+
+    mission = hospital()
+    order = nx.transitive_closure_dag(nx.DiGraph([(c.first, c.second) for c in mission.constraints
+                                                  if c.kind in ("SEQ", "FB")]))
+    tg = mission.task_graph
+
+    def room_of(v):
+        return {p.hddl_param: str(p.value) for p in tg.decomposition(v).decomposition.instance.parameters}["?rm"]
+
+    def ordered(d, first, second):
+        a = [v for v in d if tg.decomposition(v).decomposition.instance.name == first]
+        b = [v for v in d if tg.decomposition(v).decomposition.instance.name == second]
+        return all(order.has_edge(x, y) for x in a for y in b if room_of(x) == room_of(y))
+
+    listed = mission.exploratory()
+    for first, second in [("ClearRoom", "UVDisinfection"), ("UVDisinfection", "ClearRoom"),
+                          ("DisposeWaste", "ReportRoomReady"), ("ReportRoomReady", "SprayDisinfection")]:
+        found = verdict(mission, f"count before(task {first}(?a, ?rm), task {second}(?b, ?rm))")
+        assert found.count == sum(ordered(d, first, second) for d in listed), (first, second)

@@ -120,7 +120,7 @@ class Mission(MissionStages):
         exactly through the components (see ``solve/verify.py``)."""
         from .solve.verify import verify  # deferred: start-up time
 
-        return verify(prop, self.decomposition_space(), self.task_graph, self.domain)
+        return verify(prop, self.decomposition_space(), self.task_graph, self.domain, self.constraints)
 
     def decomposition_model(self) -> DecompositionModel:
         """The whole decomposition space as one CP-SAT model, for embedding (see ``solve/embedding.py``)."""

@@ -3,7 +3,10 @@
 A property's formula is grounded first: each ``?variable`` takes every value that the task
 instances matching its patterns give it, and the formula holds when it holds for every such
 binding.  Each ``uses`` atom of the grounded formula is then a set of task decompositions (the
-atom is true of a mission decomposition that chooses one of them).
+atom is true of a mission decomposition that chooses one of them).  ``before(A, B)`` reads the
+order of the mission's sequential and fallback constraints (a graph built once, its paths the
+transitive order): each pair of an A and a B decomposition that it leaves unordered becomes
+``not (a and b)``.
 
 The decomposition space is a product of independent components, so a mission decomposition
 makes an atom true when one of its components' parts does.  Each component's solutions are
@@ -14,18 +17,23 @@ kept per vector as one part per component.
 
 Components that no atom touches are counted, never listed.  A component an atom touches must be
 listed or layered; one that was only counted (too many solutions to list) is refused, named,
-rather than answered wrongly.  Atoms over order, state and robots (``before``, ``finally``,
-``initially-needed``, ``robots``) are refused with a message saying so.
+rather than answered wrongly, and so is a property with more than ``MAX_ATOMS`` atoms after
+grounding.  Atoms over state and robots (``finally``, ``initially-needed``, ``robots``) are
+refused with a message saying so.
 """
 from __future__ import annotations
 
 import itertools
+from functools import cached_property
 from dataclasses import dataclass
-from typing import Iterator, Literal, Mapping, Sequence
+from typing import Iterable, Iterator, Literal, Mapping, Sequence
+
+import networkx as nx
 
 from ..errors import MissionError, Problem
 from ..model.domain import Domain
 from ..model.properties import (
+    Before,
     Formula,
     Implies,
     Junction,
@@ -35,6 +43,7 @@ from ..model.properties import (
     Uses,
 )
 from ..model.task_graph import Decomposition, TaskGraph
+from ..pipeline.constraints import FB, SEQ, Constraint
 from .cpsat import Component, DecompositionSpace
 
 Status = Literal["holds", "fails", "vacuous", "count"]
@@ -64,9 +73,11 @@ class Verdict:
     witness: tuple[int, ...] | None
 
 
-def verify(prop: Property, space: DecompositionSpace, tg: TaskGraph, domain: Domain) -> Verdict:
-    """The verdict of ``prop`` over ``space`` (the mission's valid decompositions)."""
-    atoms = _Atoms(tg, domain, prop)
+def verify(prop: Property, space: DecompositionSpace, tg: TaskGraph, domain: Domain,
+           constraints: Iterable[Constraint] = ()) -> Verdict:
+    """The verdict of ``prop`` over ``space`` (the mission's valid decompositions); ``before``
+    atoms read the mission's ``constraints``."""
+    atoms = _Atoms(tg, domain, prop, constraints)
     grounded = atoms.ground(prop.formula)
     histogram = _histogram(space, atoms)
     total = sum(count for count, _ in histogram.values())
@@ -93,8 +104,9 @@ class _Atoms:
     """The grounded atoms of one property: each a set of Task Graph decomposition vertices, kept
     once however often it recurs."""
 
-    def __init__(self, tg: TaskGraph, domain: Domain, prop: Property) -> None:
+    def __init__(self, tg: TaskGraph, domain: Domain, prop: Property, constraints: Iterable[Constraint]) -> None:
         self.prop = prop
+        self.constraints = constraints
         self.decompositions: list[tuple[int, Decomposition]] = []
         for vertex in tg.decompositions():
             assert vertex.decomposition is not None
@@ -128,7 +140,27 @@ class _Atoms:
             return ("or", (("not", (self._ground(formula.premise, binding),)), self._ground(formula.conclusion, binding)))
         if isinstance(formula, Uses):
             return self._bit(frozenset(v for v, d in self.decompositions if self._used(formula.target, d, binding)))
-        raise self.refused(f"{type(formula).__name__.lower()} atoms are not decided yet (uses atoms are)")
+        if isinstance(formula, Before):
+            return self._before(formula, binding)
+        raise self.refused(f"{type(formula).__name__.lower()} atoms are not decided yet (uses and before atoms are)")
+
+    def _before(self, formula: Before, binding: Mapping[str, str]) -> Grounded:
+        """No pair of chosen task decompositions, one of an A instance and one of a B instance,
+        that the constraints leave unordered: each such pair becomes ``not (a and b)``."""
+        firsts = [v for v, d in self.decompositions if self._matches(formula.first, d, binding) is not None]
+        seconds = [v for v, d in self.decompositions if self._matches(formula.second, d, binding) is not None]
+        pairs = [(a, b) for a in firsts for b in seconds
+                 if a != b and not (a in self.order and b in self.order and nx.has_path(self.order, a, b))]
+        return ("and", tuple(("not", (("and", (self._bit(frozenset([a])), self._bit(frozenset([b])))),))
+                             for a, b in pairs))
+
+    @cached_property
+    def order(self) -> "nx.DiGraph[int]":
+        """The sequential and fallback constraints between task decompositions, as a graph (its
+        paths are the transitive order), built once."""
+        graph: "nx.DiGraph[int]" = nx.DiGraph()
+        graph.add_edges_from((c.first, c.second) for c in self.constraints if c.kind in (SEQ, FB))
+        return graph
 
     def _bit(self, decompositions: frozenset[int]) -> int:
         if decompositions not in self.bit_of:
@@ -204,6 +236,9 @@ def _patterns(formula: Formula) -> Iterator[TaskPattern]:
         yield from _patterns(formula.conclusion)
     elif isinstance(formula, Uses) and isinstance(formula.target, TaskPattern):
         yield formula.target
+    elif isinstance(formula, Before):
+        yield formula.first
+        yield formula.second
 
 
 def _variables(formula: Formula) -> Iterator[str]:
