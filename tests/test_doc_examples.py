@@ -35,6 +35,8 @@ def test_api_guide_examples_run(monkeypatch, capsys):
     every = [sum(per_decomposition[d] for d in ds) for ds in listed]
     assert printed[3].split(" ", 1)[0] == str(best.optimum[1]) == str(min(every))
     assert printed[4] == "3"
+    # Mission.verify: every decomposition drops an item; the witness is one of them
+    assert printed[5].startswith("fails 8 8 ['AT1_1|1'")
 
 
 def test_readme_example_runs(monkeypatch, capsys):
