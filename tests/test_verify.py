@@ -244,3 +244,12 @@ def test_before_agrees_with_brute_force_over_the_constraint_order():
                           ("DisposeWaste", "ReportRoomReady"), ("ReportRoomReady", "SprayDisinfection")]:
         found = verdict(mission, f"count before(task {first}(?a, ?rm), task {second}(?b, ?rm))")
         assert found.count == sum(ordered(d, first, second) for d in listed), (first, second)
+
+
+def test_unknown_decomposition_ids_and_fifo_properties_are_refused(tmp_path, capsys):
+    assert main(["verify", str(EXAMPLE), "--property", "never uses(decomposition AT9_9|1)", "-q"]) == 2
+    assert "the mission has no task decomposition AT9_9|1" in capsys.readouterr().err
+    fifo = tmp_path / "properties"
+    os.mkfifo(fifo)
+    assert main(["verify", str(EXAMPLE), "--properties", str(fifo), "-q"]) == 2  # at once, never blocking
+    assert "not a regular file" in capsys.readouterr().err

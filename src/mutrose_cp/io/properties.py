@@ -171,7 +171,7 @@ def parse_property(text: str, name: str, where: str, *, line: int | None = None,
 def read_properties(path: str | os.PathLike[str]) -> list[Property]:
     """Every property of the file at ``path``, in order; all its problems raised together."""
     source = os.fspath(path)
-    text = decode_utf8(read_bytes(source, "properties file"), source, "properties file")
+    text = decode_utf8(read_bytes(source, "properties"), source, "properties file")
     properties: list[Property] = []
     problems: list[Problem] = []
     seen: dict[str, int] = {}

@@ -139,7 +139,11 @@ class _Atoms:
         if isinstance(formula, Implies):
             return ("or", (("not", (self._ground(formula.premise, binding),)), self._ground(formula.conclusion, binding)))
         if isinstance(formula, Uses):
-            return self._bit(frozenset(v for v, d in self.decompositions if self._used(formula.target, d, binding)))
+            chosen = frozenset(v for v, d in self.decompositions if self._used(formula.target, d, binding))
+            if not chosen and isinstance(formula.target, tuple) and formula.target[0] == "decomposition":
+                raise self.refused(f"the mission has no task decomposition {formula.target[1]} "
+                                   "(the output names them, e.g. AT1_1|1)")
+            return self._bit(chosen)
         if isinstance(formula, Before):
             return self._before(formula, binding)
         raise self.refused(f"{type(formula).__name__.lower()} atoms are not decided yet (uses and before atoms are)")
