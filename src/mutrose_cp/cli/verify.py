@@ -21,6 +21,7 @@ from ..io.properties import command_line_properties, read_properties
 from ..mission import Mission
 from ..model.properties import Property
 from ..output.builder import OutputModel
+from ..output.counts import shown_count
 from ..output.files import staged_outputs
 from ..output.formats import write_output
 from ..pipeline.property_checks import property_problems
@@ -78,9 +79,11 @@ def _line(v: Verdict, witness: Path | None) -> str:
     if v.status == "vacuous":
         return f"{name}: vacuous (the mission has no valid decomposition)"
     shown = f" (witness {witness})" if witness is not None else ""
+    # exact up to 15 digits, else their magnitude (the JSON summary has every digit)
+    count, total = shown_count(v.count), shown_count(v.total, digit_count=True)
     if v.status == "count":
-        return f"{name}: {v.count} of {v.total} valid decompositions"
-    return f"{name}: {v.status}, {v.count} of {v.total} valid decompositions satisfy the formula{shown}"
+        return f"{name}: {count} of {total} valid decompositions"
+    return f"{name}: {v.status}, {count} of {total} valid decompositions satisfy the formula{shown}"
 
 
 def _write_witnesses(mission: Mission, verdicts: list[Verdict], paths: dict[str, Path]) -> dict[str, Path]:

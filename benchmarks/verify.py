@@ -1,0 +1,67 @@
+"""``mutrose-cp verify`` measured: one whole process per property, start-up included.
+
+* the delivery family (the reference's food-logistics delivery, n deliveries in one world:
+  ``benchmarks/generate.py``) at n = 100, 1000 and 5000, with ``never uses(action ...)``, a
+  ``count uses(method ...)`` and a conjunction;
+* the bundled example examples/hospital-disinfection, with a property that holds (``before``
+  per room), one that fails (with its witness written) and a count.
+
+Each run is ``python -m mutrose_cp verify ... -q --json-summary``, measured by the parent as the
+other benchmarks are (wall time and peak memory, ``benchmarks/run.py:measure``), with the
+package's bytecode compiled first.  Results go to ``benchmarks/results/verify.json``; the table
+is printed as Markdown for docs/benchmarks.md.
+
+    python benchmarks/verify.py           # every size (about a minute)
+    python benchmarks/verify.py --quick   # n = 100 and the example
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from generate import generate  # noqa: E402
+from run import compile_bytecode, measure  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE = ROOT / "examples" / "hospital-disinfection"
+DELIVERY = ["never uses(action deliver-to-table)", "count uses(method fetch-meal-with-robot)",
+            "some uses(method table-deliver) and uses(method fetch-deliver)"]
+HOSPITAL = ["always before(task ClearRoom(?r, ?rm), task UVDisinfection(?u, ?rm))",
+            "never uses(action open-door)", "count uses(task SprayDisinfection)"]
+
+
+def run(inputs: list[str], prop: str, work: Path) -> dict:
+    cmd = [sys.executable, "-m", "mutrose_cp", "verify", *inputs, "--property", prop, "-q", "--json-summary",
+           "--witness-dir", str(work / "witnesses")]
+    result = measure(cmd, ROOT, 600)
+    return {"property": prop, "seconds": result["seconds"], "peak_mb": result["peak_mb"], "status": result["status"]}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="n = 100 and the example only")
+    args = parser.parse_args(argv)
+    compile_bytecode()
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        work = Path(folder)
+        for n in ([100] if args.quick else [100, 1000, 5000]):
+            hddl, gm, cfg = generate("delivery", n, work / f"delivery-{n}")
+            for prop in DELIVERY:
+                rows.append({"mission": f"delivery n={n}", **run([str(hddl), str(gm), str(cfg)], prop, work)})
+        for prop in HOSPITAL:
+            rows.append({"mission": "examples/hospital-disinfection", **run([str(EXAMPLE)], prop, work)})
+    out = ROOT / "benchmarks" / "results" / ("verify-quick.json" if args.quick else "verify.json")
+    out.write_text(json.dumps(rows, indent=1) + "\n")
+    print("| mission | property | status | time | peak memory |\n|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['mission']} | `{r['property']}` | {r['status']} | {r['seconds']:.2f} s | {r['peak_mb']:.0f} MB |")
+    return 0 if all(r["status"] in ("ok", "exit 1") for r in rows) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
