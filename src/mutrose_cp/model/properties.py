@@ -12,7 +12,7 @@ formula can key a cache of the literals it is encoded into.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Iterator, Literal
 
 Quantifier = Literal["always", "some", "never", "count"]
 UsedKind = Literal["method", "action", "capability", "decomposition"]
@@ -116,3 +116,28 @@ class Property:
     formula: Formula
     text: str
     where: str  # "file:line" or "--property 2"
+
+
+def atoms(formula: Formula) -> Iterator[Atom]:
+    """The atoms of ``formula``, left to right (each occurrence)."""
+    if isinstance(formula, Not):
+        yield from atoms(formula.operand)
+    elif isinstance(formula, Junction):
+        for operand in formula.operands:
+            yield from atoms(operand)
+    elif isinstance(formula, Implies):
+        yield from atoms(formula.premise)
+        yield from atoms(formula.conclusion)
+    else:
+        yield formula
+
+
+def task_patterns(atom: Atom) -> tuple[TaskPattern, ...]:
+    """The task patterns an atom names (its ``?variables`` live there)."""
+    if isinstance(atom, Uses):
+        return (atom.target,) if isinstance(atom.target, TaskPattern) else ()
+    if isinstance(atom, Before):
+        return (atom.first, atom.second)
+    if isinstance(atom, Robots):
+        return (atom.task,)
+    return ()

@@ -8,20 +8,7 @@ from typing import Iterable, Iterator
 
 from ..errors import Problem, closest
 from ..model.domain import Domain
-from ..model.properties import (
-    Before,
-    Fact,
-    Finally,
-    Formula,
-    Implies,
-    InitiallyNeeded,
-    Junction,
-    Not,
-    Property,
-    Robots,
-    TaskPattern,
-    Uses,
-)
+from ..model.properties import Fact, Finally, Formula, InitiallyNeeded, Property, TaskPattern, Uses, atoms, task_patterns
 
 
 def property_problems(properties: Iterable[Property], domain: Domain) -> list[Problem]:
@@ -47,23 +34,14 @@ class _DomainNames:
         }
 
     def problems(self, formula: Formula) -> Iterator[str]:
-        if isinstance(formula, Not):
-            yield from self.problems(formula.operand)
-        elif isinstance(formula, Junction):
-            for operand in formula.operands:
-                yield from self.problems(operand)
-        elif isinstance(formula, Implies):
-            yield from self.problems(formula.premise)
-            yield from self.problems(formula.conclusion)
-        elif isinstance(formula, Uses):
-            yield from self._target(formula.target)
-        elif isinstance(formula, Before):
-            yield from self._task(formula.first)
-            yield from self._task(formula.second)
-        elif isinstance(formula, (Finally, InitiallyNeeded)):
-            yield from self._fact(formula.fact)
-        elif isinstance(formula, Robots):
-            yield from self._task(formula.task)
+        for atom in atoms(formula):
+            if isinstance(atom, Uses):
+                yield from self._target(atom.target)
+            elif isinstance(atom, (Finally, InitiallyNeeded)):
+                yield from self._fact(atom.fact)
+            else:
+                for task in task_patterns(atom):
+                    yield from self._task(task)
 
     def _target(self, target: TaskPattern | tuple[str, str]) -> Iterator[str]:
         if isinstance(target, TaskPattern):

@@ -41,6 +41,8 @@ from ..model.properties import (
     Property,
     TaskPattern,
     Uses,
+    atoms,
+    task_patterns,
 )
 from ..model.task_graph import Decomposition, TaskGraph
 from ..pipeline.constraints import FB, SEQ, Constraint
@@ -230,19 +232,8 @@ def _methods(d: Decomposition) -> set[str]:
 
 
 def _patterns(formula: Formula) -> Iterator[TaskPattern]:
-    if isinstance(formula, Not):
-        yield from _patterns(formula.operand)
-    elif isinstance(formula, Junction):
-        for f in formula.operands:
-            yield from _patterns(f)
-    elif isinstance(formula, Implies):
-        yield from _patterns(formula.premise)
-        yield from _patterns(formula.conclusion)
-    elif isinstance(formula, Uses) and isinstance(formula.target, TaskPattern):
-        yield formula.target
-    elif isinstance(formula, Before):
-        yield formula.first
-        yield formula.second
+    for atom in atoms(formula):
+        yield from task_patterns(atom)
 
 
 def _variables(formula: Formula) -> Iterator[str]:
