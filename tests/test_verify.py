@@ -253,3 +253,22 @@ def test_unknown_decomposition_ids_and_fifo_properties_are_refused(tmp_path, cap
     os.mkfifo(fifo)
     assert main(["verify", str(EXAMPLE), "--properties", str(fifo), "-q"]) == 2  # at once, never blocking
     assert "not a regular file" in capsys.readouterr().err
+
+
+def test_embedding_model_requires_or_forbids_a_property():
+    """Posted to DecompositionModel, a property keeps exactly the decompositions verify counts."""
+    from test_api import enumerate_all
+
+    mission = hospital()
+    for text in ["count uses(method uv-after-opening-door)",
+                 "count before(task UVDisinfection(?u, ?rm), task ClearRoom(?r, ?rm))",
+                 "count uses(task SprayDisinfection) and not uses(action open-door)"]:
+        prop = command_line_properties([text])[0]
+        counted = mission.verify(prop)
+        required = mission.decomposition_model()
+        required.add_property(prop)
+        forbidden = mission.decomposition_model()
+        forbidden.add_property(prop, holds=False)
+        kept, dropped = enumerate_all(required).solutions, enumerate_all(forbidden).solutions
+        assert (len(kept), len(dropped)) == (counted.count, counted.total - counted.count), text
+        assert len(set(kept)) == len(kept)  # one solution per decomposition: the helpers are defined

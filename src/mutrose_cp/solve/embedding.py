@@ -26,6 +26,8 @@ from .boolean_model import FALSE, TRUE, Lit
 from .encoding import Encoding
 from .native import cmh
 from .proto import ProtoBuilder, negated
+from .verify import Grounded, ground
+from ..model.properties import Property
 
 #: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation
 #: (``IntVar`` and ``NotBooleanVariable`` share this base class).
@@ -166,6 +168,46 @@ class DecompositionModel:
     def chosen_or(self, solver: cp_model.CpSolver) -> dict[str, str]:
         """OR goal -> chosen child, for the OR goals that are active in the solution."""
         return {goal: child for (goal, child), lit in self.or_choice.items() if solver.BooleanValue(lit)}
+
+    def add_property(self, prop: Property, holds: bool = True) -> CpLiteral:
+        """Post ``prop``'s formula (its quantifier aside) to the model: every solution then
+        satisfies it (``holds``) or violates it (``holds=False``), so that an allocator can
+        require or forbid a property.  Returns the literal "the formula holds";
+        :meth:`property_literal` gives it without posting anything, e.g. to weigh it in an
+        objective."""
+        literal = self.property_literal(prop)
+        self.model.add_bool_and([literal if holds else literal.Not()])
+        return literal
+
+    def property_literal(self, prop: Property) -> CpLiteral:
+        """A literal equal to "the solution satisfies ``prop``'s formula" (``solve/verify.py``
+        grounds it; ``uses`` and ``before`` atoms)."""
+        grounded = ground(prop, self.mission.task_graph, self.mission.domain, self.mission.constraints)
+        by_vertex = {v.index: self.decomposition[v.decomposition.id] for v in self.mission.task_graph.decompositions()
+                     if v.decomposition is not None}
+        atoms = [self._any_of([by_vertex[v] for v in sorted(chosen)]) for chosen in grounded.atoms]
+        return self._formula_literal(grounded.formula, atoms)
+
+    def _any_of(self, literals: list[CpLiteral]) -> CpLiteral:
+        if not literals:
+            return self.false
+        any_literal = self.model.new_bool_var("")
+        self.model.add_max_equality(any_literal, literals)
+        return any_literal
+
+    def _formula_literal(self, formula: Grounded, atoms: list[CpLiteral]) -> CpLiteral:
+        if isinstance(formula, int):
+            return atoms[formula]
+        op, operands = formula
+        literals = [self._formula_literal(f, atoms) for f in operands]
+        if op == "not":
+            return literals[0].Not()
+        result = self.model.new_bool_var("")
+        if op == "and":
+            self.model.add_min_equality(result, literals or [self.true])
+        else:
+            self.model.add_max_equality(result, literals or [self.false])
+        return result
 
     def forbid(self, decompositions: list[str]) -> None:
         """Convenience: exclude every solution that chooses all of ``decompositions``."""

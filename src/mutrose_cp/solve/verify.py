@@ -99,6 +99,24 @@ def verify(prop: Property, space: DecompositionSpace, tg: TaskGraph, domain: Dom
 
 # --- grounding: every atom becomes a set of task decompositions ------------------------------
 
+
+@dataclass(frozen=True)
+class GroundedProperty:
+    """A property's formula over atoms that are sets of task decompositions (Task Graph
+    vertices): ``formula`` is an atom's index, or ``(operator, operands)`` with ``and``, ``or``
+    and ``not``.  What the embedding model posts (``DecompositionModel.add_property``)."""
+
+    formula: "Grounded"
+    atoms: tuple[frozenset[int], ...]
+
+
+def ground(prop: Property, tg: TaskGraph, domain: Domain, constraints: Iterable[Constraint] = ()) -> GroundedProperty:
+    """``prop``'s formula grounded on the mission (its quantifier is not part of it)."""
+    atoms = _Atoms(tg, domain, prop, constraints)
+    formula = atoms.ground(prop.formula)
+    return GroundedProperty(formula, tuple(atoms.sets))
+
+
 Grounded = int | tuple[str, tuple["Grounded", ...]]  # an atom's bit, or (operator, operands)
 
 
