@@ -272,3 +272,24 @@ def test_embedding_model_requires_or_forbids_a_property():
         kept, dropped = enumerate_all(required).solutions, enumerate_all(forbidden).solutions
         assert (len(kept), len(dropped)) == (counted.count, counted.total - counted.count), text
         assert len(set(kept)) == len(kept)  # one solution per decomposition: the helpers are defined
+
+
+@pytest.mark.parametrize(("comparison", "bound"), [(">=", 2), (">=", 3), ("<=", 2), ("==", 1), ("!=", 2), (">", 1), ("<", 3)])
+def test_robots_agrees_with_brute_force(comparison, bound):
+    """``robots(task T) OP k``: every chosen T instance's robot number allows only numbers that
+    compare so; checked per task name against each listed decomposition."""
+    import operator
+
+    compare = {">=": operator.ge, "<=": operator.le, "==": operator.eq, "!=": operator.ne,
+               ">": operator.gt, "<": operator.lt}[comparison]
+    mission = hospital()
+    tg, listed = mission.task_graph, mission.exploratory()
+    names = sorted({t.name for t in mission.expansion.instances})
+    assert any(t.robot_number.min != t.robot_number.max for t in mission.expansion.instances)  # a range among them
+    for name in names:
+        def ok(d):
+            numbers = [tg.decomposition(v).decomposition.instance.robot_number for v in d
+                       if tg.decomposition(v).decomposition.instance.name == name]
+            return all(compare(n, bound) for r in numbers for n in range(r.min, r.max + 1))
+        found = verdict(mission, f"count robots(task {name}) {comparison} {bound}")
+        assert found.count == sum(ok(d) for d in listed), name

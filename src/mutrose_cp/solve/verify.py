@@ -18,20 +18,23 @@ kept per vector as one part per component.
 Components that no atom touches are counted, never listed.  A component an atom touches must be
 listed or layered; one that was only counted (too many solutions to list) is refused, named,
 rather than answered wrongly, and so is a property with more than ``MAX_ATOMS`` atoms after
-grounding.  Atoms over state and robots (``finally``, ``initially-needed``, ``robots``) are
+grounding.  ``robots(A) >= k`` is true when every chosen A decomposition's robot number
+allows only numbers that compare so.  Atoms over state (``finally``, ``initially-needed``) are
 refused with a message saying so.
 """
 from __future__ import annotations
 
 import itertools
+import operator
 from functools import cached_property
 from dataclasses import dataclass
-from typing import Iterable, Iterator, Literal, Mapping, Sequence
+from typing import Callable, Iterable, Iterator, Literal, Mapping, Sequence
 
 import networkx as nx
 
 from ..errors import MissionError, Problem
 from ..model.domain import Domain
+from ..model.goal_model import RobotNumber
 from ..model.properties import (
     Before,
     Formula,
@@ -39,6 +42,7 @@ from ..model.properties import (
     Junction,
     Not,
     Property,
+    Robots,
     TaskPattern,
     Uses,
     atoms,
@@ -166,7 +170,13 @@ class _Atoms:
             return self._bit(chosen)
         if isinstance(formula, Before):
             return self._before(formula, binding)
-        raise self.refused(f"{type(formula).__name__.lower()} atoms are not decided yet (uses and before atoms are)")
+        if isinstance(formula, Robots):
+            # every number the instance's robot number allows must compare so: [1,3] >= 2 does not
+            short = frozenset(v for v, d in self.decompositions if self._matches(formula.task, d, binding) is not None
+                              and not _robots_compare(d.instance.robot_number, formula.comparison, formula.bound))
+            return ("not", (self._bit(short),))
+        raise self.refused(f"{type(formula).__name__.lower()} atoms are not decided yet "
+                           "(uses, before and robots atoms are)")
 
     def _before(self, formula: Before, binding: Mapping[str, str]) -> Grounded:
         """No pair of chosen task decompositions, one of an A instance and one of a B instance,
@@ -236,6 +246,17 @@ class _Atoms:
 
     def refused(self, why: str) -> MissionError:
         return MissionError(Problem(self.prop.where, f"property {self.prop.name}: cannot be verified: {why}"))
+
+
+_COMPARE: dict[str, Callable[[int, int], bool]] = {
+    ">=": operator.ge, "<=": operator.le, "==": operator.eq, "!=": operator.ne, ">": operator.gt, "<": operator.lt}
+
+
+def _robots_compare(number: RobotNumber, comparison: str, bound: int) -> bool:
+    """Whether every robot number the instance allows compares so with ``bound``."""
+    allowed = (number.min, number.max)
+    return all(_COMPARE[comparison](n, bound) for n in allowed) if comparison != "!=" else \
+        not number.min <= bound <= number.max
 
 
 def _methods(d: Decomposition) -> set[str]:
