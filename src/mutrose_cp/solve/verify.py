@@ -83,22 +83,21 @@ def verify(prop: Property, space: DecompositionSpace, tg: TaskGraph, domain: Dom
            constraints: Iterable[Constraint] = ()) -> Verdict:
     """The verdict of ``prop`` over ``space`` (the mission's valid decompositions); ``before``
     atoms read the mission's ``constraints``."""
-    atoms = _Atoms(tg, domain, prop, constraints)
-    grounded = atoms.ground(prop.formula)
-    histogram = _histogram(space, atoms)
+    grounded = ground(prop, tg, domain, constraints)
+    histogram, shared = _histogram(space, grounded.atoms, prop)
     total = sum(count for count, _ in histogram.values())
     if total == 0:
         return Verdict(prop, "vacuous", 0, 0, None)
-    satisfied = {vector: entry for vector, entry in histogram.items() if _evaluate(grounded, vector)}
+    satisfied = {vector: entry for vector, entry in histogram.items() if _evaluate(grounded.formula, vector)}
     count = sum(c for c, _ in satisfied.values())
     broken = {vector: entry for vector, entry in histogram.items() if vector not in satisfied}
     if prop.quantifier == "count":
-        return Verdict(prop, "count", count, total, _first_witness(satisfied))
+        return Verdict(prop, "count", count, total, _first_witness(satisfied, shared))
     if prop.quantifier == "always":
-        return Verdict(prop, "holds" if not broken else "fails", count, total, _first_witness(broken))
+        return Verdict(prop, "holds" if not broken else "fails", count, total, _first_witness(broken, shared))
     if prop.quantifier == "never":
-        return Verdict(prop, "holds" if not satisfied else "fails", count, total, _first_witness(satisfied))
-    return Verdict(prop, "holds" if satisfied else "fails", count, total, _first_witness(satisfied))
+        return Verdict(prop, "holds" if not satisfied else "fails", count, total, _first_witness(satisfied, shared))
+    return Verdict(prop, "holds" if satisfied else "fails", count, total, _first_witness(satisfied, shared))
 
 
 # --- grounding: every atom becomes a set of task decompositions ------------------------------
@@ -245,7 +244,12 @@ class _Atoms:
                 if (bound := self._matches(pattern, d, {})) is not None and variable in bound}
 
     def refused(self, why: str) -> MissionError:
-        return MissionError(Problem(self.prop.where, f"property {self.prop.name}: cannot be verified: {why}"))
+        return refusal(self.prop, why)
+
+
+def refusal(prop: Property, why: str) -> MissionError:
+    """The error of a property that is not decided (never answered approximately)."""
+    return MissionError(Problem(prop.where, f"property {prop.name}: cannot be verified: {why}"))
 
 
 _COMPARE: dict[str, Callable[[int, int], bool]] = {
@@ -301,42 +305,42 @@ def _vector(decompositions: Sequence[int], sets: Sequence[frozenset[int]]) -> in
     return sum(1 << bit for bit, chosen in enumerate(sets) if not chosen.isdisjoint(decompositions))
 
 
-_NO_WITNESS: Witness = (None, (-1,))  # a part of the mission was only counted
-
-
-def _histogram(space: DecompositionSpace, atoms: _Atoms) -> Histogram:
+def _histogram(space: DecompositionSpace, sets: Sequence[frozenset[int]],
+               prop: Property) -> tuple[Histogram, tuple[int, ...] | None]:
+    """The histogram over atom vectors of the whole space, and the part every witness shares
+    (one solution of each component no atom touches; None when one of them was only counted,
+    so that no witness can be written out)."""
     if not space.encoding.tasks:
-        return {}
-    touched: frozenset[int] = frozenset().union(*atoms.sets)
+        return {}, None
+    touched: frozenset[int] = frozenset().union(*sets)
     fixed = tuple(space.fixed)
-    histogram: Histogram = {_vector(fixed, atoms.sets): (1, (None, fixed))}
-    untouched: list[tuple[int, ...]] | None = []  # one part of each, shared by every witness
+    histogram: Histogram = {_vector(fixed, sets): (1, (None, fixed))}
+    shared: list[int] | None = []
     for number, component in enumerate(space.components):
         if component.count == 0:
-            return {}
+            return {}, None
         own = {space.var_to_dec[v] for v in component.choice_vars}
         if touched.isdisjoint(own):
             histogram = {v: (c * component.count, w) for v, (c, w) in histogram.items()}
             alternatives = space.alternatives(component)
-            if untouched is not None and alternatives is not None:
-                untouched.append(next(iter(alternatives)))
-            else:
-                untouched = None  # only counted: no witness can be written out
+            if alternatives is None:
+                shared = None
+            elif shared is not None:
+                shared.extend(next(iter(alternatives)))
             continue
-        histogram = _combine(histogram, _component_histogram(space, component, number, atoms))
-    shared: tuple[int, ...] = tuple(d for part in untouched for d in part) if untouched is not None else ()
-    return {v: (c, (w, shared) if untouched is not None else _NO_WITNESS) for v, (c, w) in histogram.items()}
+        histogram = _combine(histogram, _component_histogram(space, component, number, sets, prop))
+    return histogram, None if shared is None else tuple(shared)
 
 
 def _component_histogram(space: DecompositionSpace, component: Component, number: int,
-                         atoms: _Atoms) -> dict[int, tuple[int, tuple[int, ...]]]:
+                         sets: Sequence[frozenset[int]], prop: Property) -> dict[int, tuple[int, tuple[int, ...]]]:
     alternatives = space.alternatives(component)
     if alternatives is None or component.count > MAX_COMPONENT_SOLUTIONS:
-        raise atoms.refused(f"part {number + 1} of the mission, which it reads, has {component.count} "
+        raise refusal(prop, f"part {number + 1} of the mission, which it reads, has {component.count} "
                              f"alternative decompositions on its own (at most {MAX_COMPONENT_SOLUTIONS} are read)")
     folded: dict[int, tuple[int, tuple[int, ...]]] = {}
     for part in alternatives:
-        vector = _vector(part, atoms.sets)
+        vector = _vector(part, sets)
         count, example = folded.get(vector, (0, part))
         folded[vector] = (count + 1, example)
     return folded
@@ -350,14 +354,13 @@ def _combine(histogram: Histogram, component: Mapping[int, tuple[int, tuple[int,
     return combined
 
 
-def _first_witness(entries: Histogram) -> tuple[int, ...] | None:
-    """The witness of the smallest vector among ``entries``, as sorted decomposition vertices."""
-    if not entries:
+def _first_witness(entries: Histogram, shared: tuple[int, ...] | None) -> tuple[int, ...] | None:
+    """The witness of the smallest vector among ``entries`` with the ``shared`` part, as sorted
+    decomposition vertices (None without entries or without a shared part)."""
+    if not entries or shared is None:
         return None
     node = entries[min(entries)][1]
-    if node is _NO_WITNESS:
-        return None
-    chosen: list[int] = []
+    chosen: list[int] = list(shared)
     while node is not None:
         node, part = node
         chosen.extend(part)
