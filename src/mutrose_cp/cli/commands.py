@@ -114,14 +114,10 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 def _check_properties(args: argparse.Namespace, mission: Mission) -> None:
     """The properties' syntax, and the names they use against the domain (exit 2 on a problem)."""
-    from ..io.properties import command_line_properties, read_properties
-    from ..pipeline.property_checks import property_problems
+    from ..io.properties import given_properties
+    from ..pipeline.property_checks import check_properties
 
-    properties = [*(read_properties(args.properties) if args.properties else ()),
-                  *command_line_properties(args.property)]
-    problems = property_problems(properties, mission.domain)
-    if problems:
-        raise MissionError(problems)
+    check_properties(given_properties(args.properties, args.property), mission.domain)
 
 
 def _check_domain(args: argparse.Namespace, mission: Mission) -> None:

@@ -17,14 +17,14 @@ from pathlib import Path
 
 from ..errors import MissionError
 from ..interrupt import phase
-from ..io.properties import command_line_properties, read_properties
+from ..io.properties import given_properties
 from ..mission import Mission
 from ..model.properties import Property
 from ..output.builder import OutputModel
 from ..output.counts import shown_count
 from ..output.files import staged_outputs
 from ..output.formats import write_output
-from ..pipeline.property_checks import property_problems
+from ..pipeline.property_checks import check_properties
 from ..solve.verify import Verdict
 from .flow import expanded, load_mission, mission_paths, refuse_outputs
 
@@ -34,15 +34,12 @@ HOLDS, FAILS, NO_DECOMPOSITION = 0, 1, 3
 def cmd_verify(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = mission_paths(args)
     start = time.perf_counter()
-    properties = [*(read_properties(args.properties) if args.properties else ()),
-                  *command_line_properties(args.property)]
+    properties = given_properties(args.properties, args.property)
     if not properties:
         raise MissionError("verify needs a property: give --property 'always ...' or --properties FILE")
     _refuse_repeated_names(properties)
     mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
-    problems = property_problems(properties, mission.domain)
-    if problems:
-        raise MissionError(problems)
+    check_properties(properties, mission.domain)
     suffix = mission.config.output.file_type
     witnesses = {p.name: Path(args.witness_dir) / f"{p.name}.{suffix}" for p in properties} if args.witness_dir else {}
     refuse_outputs(list(witnesses.values()), mission, (hddl, gm, cfg, args.properties), folders=(args.witness_dir,))

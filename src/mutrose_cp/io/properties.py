@@ -214,3 +214,9 @@ def command_line_properties(texts: Sequence[str]) -> list[Property]:
     if problems:
         raise MissionError(problems)
     return properties
+
+
+def given_properties(path: str | os.PathLike[str] | None, texts: Sequence[str]) -> list[Property]:
+    """The properties of a command line: those of the file at ``path`` (when given), then each
+    of ``texts`` (``--property``), in order."""
+    return [*(read_properties(path) if path else ()), *command_line_properties(texts)]

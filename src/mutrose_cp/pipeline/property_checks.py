@@ -6,9 +6,16 @@ from __future__ import annotations
 
 from typing import Iterable, Iterator
 
-from ..errors import Problem, closest
+from ..errors import MissionError, Problem, closest
 from ..model.domain import Domain
 from ..model.properties import Fact, Finally, Formula, InitiallyNeeded, Property, TaskPattern, Uses, atoms, task_patterns
+
+
+def check_properties(properties: Iterable[Property], domain: Domain) -> None:
+    """Raise every problem of :func:`property_problems` together (exit status 2)."""
+    problems = property_problems(properties, domain)
+    if problems:
+        raise MissionError(problems)
 
 
 def property_problems(properties: Iterable[Property], domain: Domain) -> list[Problem]:
