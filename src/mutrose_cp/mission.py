@@ -114,13 +114,15 @@ class Mission(MissionStages):
 
         return decompose(self, request if request is not None else DecompositionRequest(), progress)
 
-    def verify(self, prop: Property) -> Verdict:
+    def verify(self, prop: Property, space: DecompositionSpace | None = None) -> Verdict:
         """Whether ``prop`` holds over every valid mission decomposition (``always``, ``never``),
         some (``some``), or for how many (``count``), with a witness decomposition; decided
-        exactly through the components (see ``solve/verify.py``)."""
+        exactly through the components (see ``solve/verify.py``).  ``space``: the mission's
+        :meth:`decomposition_space`, when it is already built (for several properties)."""
         from .solve.verify import verify  # deferred: start-up time
 
-        return verify(prop, self.decomposition_space(), self.task_graph, self.domain, self.constraints)
+        space = space if space is not None else self.decomposition_space()
+        return verify(prop, space, self.task_graph, self.domain, self.constraints)
 
     def decomposition_model(self) -> DecompositionModel:
         """The whole decomposition space as one CP-SAT model, for embedding (see ``solve/embedding.py``)."""

@@ -45,7 +45,8 @@ def cmd_verify(args: argparse.Namespace) -> int:
     refuse_outputs(list(witnesses.values()), mission, (hddl, gm, cfg, args.properties), folders=(args.witness_dir,))
     expanded(mission)
     with phase("deciding the properties"):
-        verdicts = [mission.verify(p) for p in properties]
+        space = mission.decomposition_space()  # built once for all of them
+        verdicts = [mission.verify(p, space) for p in properties]
     written = _write_witnesses(mission, verdicts, witnesses) if witnesses else {}
     for v in verdicts:
         print(_line(v, written.get(v.property.name)))
