@@ -3,6 +3,11 @@
 * the delivery family (the reference's food-logistics delivery, n deliveries in one world:
   ``benchmarks/generate.py``) at n = 100, 1000 and 5000, with ``never uses(action ...)``, a
   ``count uses(method ...)`` and a conjunction;
+* the vital-signs family (the reference's vital-signs monitoring, n rooms of two patients each)
+  at n = 100 and 5000, with ``before`` over every room and patient;
+* the coupled-sequence family (n visits to one kitchen that each may mark it busy or free and
+  test it: one layered component) at n = 30 and 200, with a count over a method and over the
+  state it ends in;
 * the bundled example examples/hospital-disinfection, with a property that holds (``before``
   per room), one that fails (with its witness written) and a count.
 
@@ -30,6 +35,8 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "hospital-disinfection"
 DELIVERY = ["never uses(action deliver-to-table)", "count uses(method fetch-meal-with-robot)",
             "some uses(method table-deliver) and uses(method fetch-deliver)"]
+VITAL_SIGNS = ["always before(task EnterRoom(?r, ?rm), task ApproachPatient(?s, ?rm, ?p))"]
+COUPLED = ["count uses(method food-pickup-mark)", "count finally(busy(Kitchen))"]
 HOSPITAL = ["always before(task ClearRoom(?r, ?rm), task UVDisinfection(?u, ?rm))",
             "never uses(action open-door)", "count uses(task SprayDisinfection)"]
 
@@ -53,6 +60,14 @@ def main(argv: list[str] | None = None) -> int:
             hddl, gm, cfg = generate("delivery", n, work / f"delivery-{n}")
             for prop in DELIVERY:
                 rows.append({"mission": f"delivery n={n}", **run([str(hddl), str(gm), str(cfg)], prop, work)})
+        for n in ([100] if args.quick else [100, 5000]):
+            hddl, gm, cfg = generate("vital-signs", n, work / f"vital-signs-{n}")
+            for prop in VITAL_SIGNS:
+                rows.append({"mission": f"vital signs n={n}", **run([str(hddl), str(gm), str(cfg)], prop, work)})
+        for n in ([30] if args.quick else [30, 200]):
+            hddl, gm, cfg = generate("coupled-sequence", n, work / f"coupled-sequence-{n}")
+            for prop in COUPLED:
+                rows.append({"mission": f"coupled sequence n={n}", **run([str(hddl), str(gm), str(cfg)], prop, work)})
         for prop in HOSPITAL:
             rows.append({"mission": "examples/hospital-disinfection", **run([str(EXAMPLE)], prop, work)})
     out = ROOT / "benchmarks" / "results" / ("verify-quick.json" if args.quick else "verify.json")

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from conftest import require_reference
 from missiongen import MissionSpec, load_mission, missions
 from mutrose_cp.mission import Mission
-from mutrose_cp.solve.cpsat import _block_solutions, _components, _simple_choice, enumerate_with_cp_sat
+from mutrose_cp.solve.cpsat import _block_solutions, split_components, _simple_choice, enumerate_with_cp_sat
 from mutrose_cp.solve import tiny
 from mutrose_cp.solve.boolean_model import TRUE, AndOf, BoolModel, Clause, Exactly, OrOf
 from mutrose_cp.solve.hubs import count_by_hubs
@@ -39,7 +39,7 @@ def _check(mission: Mission, hub_min: int, max_hubs: int = 4) -> int:
         return 0
     enc = mission.encoding()
     compared = 0
-    for comp in _components(enc):
+    for comp in split_components(enc):
         if len(comp.records) < 2 or _simple_choice(comp) is not None:
             continue
         counted = count_by_hubs(enc.model, comp.records,

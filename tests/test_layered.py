@@ -254,3 +254,43 @@ def test_listed_solutions_read_as_sorted_decomposition_vertices():
     assert list(listed) == [(7, 40), (12,)] == list(listed) and listed.first() == (7, 40)
     assert listed.bounds() == (7, 40)
     assert Listed([frozenset()], {}).bounds() is None and list(Listed([frozenset()], {})) == [()]
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
+@given(st.integers(1, 5), st.data())
+def test_verify_folds_a_layered_component_without_listing_it(n, data):
+    """verify's forward pass over a layered component (solve/verify.py) gives, per atom vector,
+    the number of its solutions that make those atoms true, as listing every path does; its
+    witness is one of them."""
+    from mutrose_cp.model.properties import Property, Uses
+    from mutrose_cp.solve.property_grounding import GroundedProperty
+    from mutrose_cp.solve.verify import decide
+
+    bm, choice_vars = _door_model(n)
+    layers = layered_space(bm, bm.records, choice_vars)
+    assert layers is not None
+    vertex = {v: 100 + v for v in choice_vars}
+    encoding = Encoding(bm, {d: v for v, d in vertex.items()}, {}, {}, tasks=[0])
+    space = DecompositionSpace(encoding, [Component(list(bm.records), choice_vars, count=layers.count, layers=layers)],
+                               vertex)
+    sets = tuple(frozenset(data.draw(st.sets(st.sampled_from(sorted(vertex.values())), min_size=1, max_size=3)))
+                 for _ in range(data.draw(st.integers(1, 3))))
+    formula = data.draw(st.sampled_from([("and", (0, ("not", (len(sets) - 1,)))), ("or", tuple(range(len(sets)))), 0]))
+    quantifier = data.draw(st.sampled_from(["count", "always", "never", "some"]))
+    prop = Property("p", quantifier, Uses(("method", "m")), "", "--property 1")
+    found = decide(prop, GroundedProperty(formula, sets), space)
+
+    def satisfies(solution: set[int], f) -> bool:
+        if isinstance(f, int):
+            return not sets[f].isdisjoint(solution)
+        op, operands = f
+        return (not satisfies(solution, operands[0]) if op == "not" else
+                all(satisfies(solution, g) for g in operands) if op == "and" else
+                any(satisfies(solution, g) for g in operands))
+
+    solutions = [{vertex[v] for v in s} for s in layers.solutions()]
+    count = sum(satisfies(s, formula) for s in solutions)
+    assert (found.count, found.total) == (count, len(solutions) == layers.count and layers.count)
+    if found.witness is not None:
+        assert set(found.witness) in solutions
+        assert satisfies(set(found.witness), formula) == (quantifier != "always")

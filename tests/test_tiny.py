@@ -12,7 +12,7 @@ from missiongen import MissionSpec, load_mission, missions
 from mutrose_cp.mission import Mission
 from mutrose_cp.io.mission_files import find_mission_files
 from mutrose_cp.solve.boolean_model import Compare, ValueAfter
-from mutrose_cp.solve.cpsat import _components, _simple_choice, enumerate_with_cp_sat
+from mutrose_cp.solve.cpsat import split_components, _simple_choice, enumerate_with_cp_sat
 from mutrose_cp.solve.tiny import enumerate_tiny, free_variables
 
 EXAMPLES = int(os.environ.get("MUTROSE_TINY_EXAMPLES", "60"))
@@ -24,7 +24,7 @@ def _compare(mission: Mission) -> tuple[int, int]:
         return 0, 0
     enc = mission.encoding()
     checked = numeric = 0
-    for comp in _components(enc):
+    for comp in split_components(enc):
         if len(comp.records) < 2 or _simple_choice(comp) is not None:
             continue
         tiny = enumerate_tiny(enc.model, comp.records, comp.choice_vars)

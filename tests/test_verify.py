@@ -3,6 +3,7 @@ force: every decomposition the exploratory algorithm lists, evaluated one by one
 from __future__ import annotations
 
 import json
+import re
 import os
 from pathlib import Path
 from typing import Iterable
@@ -139,9 +140,10 @@ def test_variables_bind_per_value():
     assert all(v.count == sum(ok(d, room) for d in listed) for v, room in zip(per_room, sorted(rooms)))
 
 
-def test_atoms_not_decided_yet_are_refused_by_name():
-    with pytest.raises(MissionError, match="property property-1: cannot be verified: finally atoms"):
-        verdict(hospital(), "always finally(cleared(Room101))")
+def test_facts_whose_variables_take_no_value_are_refused_by_name():
+    with pytest.raises(MissionError, match="property property-1: cannot be verified: the variable [?]x of cleared"):
+        verdict(hospital(), "always finally(cleared(?x))")
+    assert verdict(hospital(), "always uses(task ClearRoom(?r, ?x)) implies finally(cleared(?x))").status == "holds"
 
 
 # --- mutrose-cp verify, as a user runs it -----------------------------------------------------
@@ -293,3 +295,39 @@ def test_robots_agrees_with_brute_force(comparison, bound):
             return all(compare(n, bound) for r in numbers for n in range(r.min, r.max + 1))
         found = verdict(mission, f"count robots(task {name}) {comparison} {bound}")
         assert found.count == sum(ok(d) for d in listed), name
+
+
+def test_a_witness_is_drawn_from_its_file(tmp_path, capsys):
+    """``graph --view decomposition --from-output WITNESS`` draws exactly the witness's task
+    decompositions, and refuses a file that is not one of the mission's valid decompositions."""
+    folder, witnesses = copy_of_example(tmp_path), tmp_path / "witnesses"
+    assert main(["verify", str(folder), "--property", NO_DOOR, "--witness-dir", str(witnesses), "-q"]) == 1
+    witness = witnesses / "no-door.json"
+    drawn = tmp_path / "no-door.dot"
+    assert main(["graph", str(folder), "--view", "decomposition", "--from-output", str(witness), "-o", str(drawn), "-q"]) == 0
+    text = drawn.read_text()
+    listed = json.loads(witness.read_text())
+    ids = sorted(listed["tasks"][key]["id"] for key in listed["mission_decompositions"][0])
+    assert sorted(set(re.findall(r'"(AT\d+_\d+\|\d+)"', text))) == ids and "open-door" in text
+    # a forged file: one task decomposition swapped for another of the same task
+    mission = hospital()
+    other = {v.decomposition.id for v in mission.task_graph.decompositions()} - set(ids)
+    same_task = sorted(i for i in other if i.split("|")[0] in {j.split("|")[0] for j in ids})
+    forged = json.loads(witness.read_text())
+    key = next(k for k in forged["mission_decompositions"][0] if forged["tasks"][k]["id"].split("|")[0] == same_task[0].split("|")[0])
+    forged["tasks"][key]["id"] = same_task[0]
+    (tmp_path / "forged.json").write_text(json.dumps(forged))
+    capsys.readouterr()
+    args = ["graph", str(folder), "--view", "decomposition", "-o", str(tmp_path / "f.dot"), "-q", "--from-output"]
+    assert main([*args, str(tmp_path / "forged.json")]) == 2
+    assert "forged.json: mission_decompositions[0]: not a valid decomposition of this mission" in capsys.readouterr().err
+    forged["tasks"][key]["id"] = "AT99_1|1"
+    (tmp_path / "foreign.json").write_text(json.dumps(forged))
+    assert main([*args, str(tmp_path / "foreign.json")]) == 2
+    assert "which this mission does not have" in capsys.readouterr().err
+    assert main([*args, str(witness), "--index", "1"]) == 2
+    assert "no decomposition 1: the file lists 1" in capsys.readouterr().err
+    assert main(["graph", str(folder), "--view", "task-graph", "--from-output", str(witness), "-o", str(drawn)]) == 2
+    assert main(["graph", str(folder), "--view", "decomposition", "--from-output", str(witness), "-o", str(witness)]) == 2
+    assert json.loads(witness.read_text()) == listed  # the witness was not overwritten
+    assert not (tmp_path / "f.dot").exists()

@@ -122,7 +122,7 @@ class Mission(MissionStages):
         from .solve.verify import verify  # deferred: start-up time
 
         space = space if space is not None else self.decomposition_space()
-        return verify(prop, space, self.task_graph, self.domain, self.constraints)
+        return verify(prop, space, self.task_graph, self.domain, self.constraints, self.initial_state)
 
     def decomposition_model(self) -> DecompositionModel:
         """The whole decomposition space as one CP-SAT model, for embedding (see ``solve/embedding.py``)."""

@@ -397,11 +397,18 @@ def _output_format(args: argparse.Namespace, mission: Mission) -> str:
 def cmd_graph(args: argparse.Namespace) -> int:
     from ..output.render import render, render_targets, view_dot
 
+    if args.from_output and args.view != "decomposition":
+        raise MissionError("--from-output draws a decomposition: give it with --view decomposition")
     hddl, gm, cfg, _folder = mission_paths(args)
     start = time.perf_counter()
     mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
-    refuse_outputs(render_targets(args.output), mission, (hddl, gm, cfg))
-    result = render(view_dot(mission, args.view, args.index), args.output)
+    refuse_outputs(render_targets(args.output), mission, (hddl, gm, cfg, *([args.from_output] if args.from_output else [])))
+    chosen = None
+    if args.from_output:
+        from ..validate.listed import listed_decomposition
+
+        chosen = listed_decomposition(mission, args.from_output, args.index)
+    result = render(view_dot(mission, args.view, args.index, chosen=chosen, source=args.from_output or ""), args.output)
     if result.message:
         print(result.message, file=sys.stderr)
     elapsed = time.perf_counter() - start

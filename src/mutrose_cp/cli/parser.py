@@ -171,6 +171,9 @@ def add_graph_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]")
     common(p)
     p.add_argument("--view", choices=("goal-model", "task-graph", "decomposition"), default="task-graph")
     p.add_argument("--index", type=int, default=0, help="decomposition view: which valid decomposition (0-based)")
+    p.add_argument("--from-output", metavar="FILE", type=input_file,
+                   help="decomposition view: draw decomposition --index as listed in FILE (an output of decompose, "
+                        "or a witness of verify), checked to be one of the mission's valid decompositions")
     p.add_argument("-o", "--output", required=True, type=output_file,
                    help="FILE.svg, FILE.png (needs graphviz) or FILE.dot")
 

@@ -22,7 +22,7 @@ import textwrap
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Iterable, Iterator, Mapping
+from typing import TYPE_CHECKING, Iterable, Iterator, Mapping, Sequence
 
 from ..pipeline.annotation_tree import GOAL, OPERATOR, TASK, RatNode
 from ..pipeline.constraints import EC, FB, SEQ
@@ -539,9 +539,11 @@ def _nth(mission: "MissionStages", index: int) -> tuple[list[int], int, int]:
     return sorted(decs), index, total
 
 
-def decomposition_dot(mission: "MissionStages", index: int = 0, rankdir: str = "LR") -> str:
+def decomposition_dot(mission: "MissionStages", index: int = 0, rankdir: str = "LR",
+                      chosen: Sequence[int] | None = None, source: str = "") -> str:
     """DOT text of valid mission decomposition ``index`` (0-based, in the order of
-    ``list(Mission.decomposition_space())``; negative indices count from the end).
+    ``list(Mission.decomposition_space())``; negative indices count from the end), or of the
+    decomposition vertices ``chosen``, read from the file ``source``.
 
     Each chosen task decomposition is a box with its output key, id, task, location and numbered
     actions (parameters replaced by their values).  SEQ constraints are black arrows, FB
@@ -553,9 +555,13 @@ def decomposition_dot(mission: "MissionStages", index: int = 0, rankdir: str = "
     Raises :class:`~mutrose_cp.errors.NoDecompositionError` (exit 3) if the mission has no valid
     decomposition and :class:`~mutrose_cp.errors.MissionError` (exit 2) for an index out of range."""
     tg = mission.task_graph
-    chosen, index, total = _nth(mission, index)
+    if chosen is None:
+        chosen, index, total = _nth(mission, index)
+        title = f"valid mission decomposition {index} (indices 0 to {total - 1} of {total})"
+    else:
+        chosen = list(chosen)
+        title = f"valid mission decomposition {index} of {Path(source).name}"
     keys = tg.decomposition_keys  # the output's task keys
-    title = f"valid mission decomposition {index} (indices 0 to {total - 1} of {total})"
     dot = _new_graph("mission_decomposition", rankdir, title, nodesep="0.25", ranksep="0.5")
     ids = {d: dot.unique(tg.vertices[d].content) for d in chosen}
 
@@ -722,15 +728,17 @@ def _write(path: Path, text: str) -> None:
         fh.write(text.encode("utf-8"))
 
 
-def view_dot(mission: "MissionStages", view: str, index: int = 0, rankdir: str | None = None) -> str:
-    """DOT text of one of :data:`VIEWS` (``goal-model``, ``task-graph``, ``decomposition``)."""
+def view_dot(mission: "MissionStages", view: str, index: int = 0, rankdir: str | None = None,
+             chosen: Sequence[int] | None = None, source: str = "") -> str:
+    """DOT text of one of :data:`VIEWS` (``goal-model``, ``task-graph``, ``decomposition``); the
+    decomposition view draws ``chosen`` (read from ``source``) when given."""
     kw = {"rankdir": rankdir} if rankdir else {}
     if view == "goal-model":
         return goal_model_dot(mission, **kw)
     if view == "task-graph":
         return task_graph_dot(mission, **kw)
     if view == "decomposition":
-        return decomposition_dot(mission, index, **kw)
+        return decomposition_dot(mission, index, chosen=chosen, source=source, **kw)
     raise ValueError(f"unknown view {view!r}: one of {', '.join(VIEWS)}")
 
 

@@ -19,7 +19,7 @@ import math
 import random
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable, Iterator, Protocol, Sequence
+from typing import Callable, Iterable, Iterator, Protocol, Sequence
 
 from ..errors import MissionError
 from .boolean_model import (
@@ -70,7 +70,9 @@ class Component:
     layers: LayeredSpace | None = None  # the component as a layered graph, when it cuts into blocks
 
 
-def _components(enc: Encoding) -> list[Component]:
+def split_components(enc: Encoding) -> list[Component]:
+    """The independent parts of an encoding: its records grouped by shared variables, each with
+    its decomposition literals (records without variables are constant components)."""
     bm = enc.model
     groups_of = VariableGroups()
     firsts: list[int] = []  # each record's first variable (0: none), read once
@@ -212,6 +214,28 @@ class DecompositionSpace:
             return
         for suffix in self._odometer(self._choices(), 0):
             yield sorted(itertools.chain(self.fixed, suffix))
+
+    def contains(self, decompositions: Iterable[int]) -> bool:
+        """Whether ``decompositions`` (Task Graph vertices) are exactly one valid mission
+        decomposition: every fixed one, and one solution of each component.  A component that
+        was only counted cannot be asked (MissionError, exit 2)."""
+        if not self.encoding.tasks or any(c.count == 0 for c in self.components):
+            return False
+        rest = set(decompositions)
+        if not rest.issuperset(self.fixed):
+            return False
+        rest.difference_update(self.fixed)
+        for number, component in enumerate(self.components):
+            own = {self.var_to_dec[v] for v in component.choice_vars}
+            part = tuple(sorted(rest & own))
+            rest -= own
+            alternatives = self.alternatives(component)
+            if alternatives is None:
+                raise MissionError(f"part {number + 1} of the mission has more than {ENUMERATION_CAP} alternative "
+                                   "decompositions on its own: a decomposition cannot be looked up among them")
+            if all(tuple(a) != part for a in alternatives):
+                return False
+        return not rest
 
     def alternatives(self, component: Component) -> Alternatives | None:
         """One component's solutions as sorted decomposition vertices: listed, or lazily from
@@ -422,7 +446,7 @@ def _canonical(r: Record, lit: Callable[[Lit], int | Const], cid: Callable[[int]
 
 def build_space(enc: Encoding, keep: bool = True, progress: Callable[[int, int], None] | None = None,
                 list_limit: int = ENUMERATION_CAP) -> DecompositionSpace:
-    comps = _components(enc)
+    comps = split_components(enc)
     # components that are identical up to renaming (one per forAll instance) are solved once
     solved: dict[tuple[object, ...], tuple[list[int], Component]] = {}
     for i, comp in enumerate(comps):
@@ -456,7 +480,7 @@ def explain(enc: Encoding) -> list[str]:
     from .run import FEASIBLE, INFEASIBLE, OPTIMAL, run_solver
 
     reasons: list[str] = []
-    for comp in _components(enc):
+    for comp in split_components(enc):
         builder = ProtoBuilder(enc.model)
         assumptions: dict[int, str] = {}
         for r in comp.records:

@@ -26,7 +26,7 @@ from .boolean_model import FALSE, TRUE, Lit
 from .encoding import Encoding
 from .native import cmh
 from .proto import ProtoBuilder, negated
-from .verify import Grounded, ground
+from .property_grounding import Grounded, ground
 from ..model.properties import Property
 
 #: A CP-SAT boolean literal: a ``BoolVar`` (or a constant ``IntVar`` of value 0/1) or its negation
@@ -182,7 +182,8 @@ class DecompositionModel:
     def property_literal(self, prop: Property) -> CpLiteral:
         """A literal equal to "the solution satisfies ``prop``'s formula" (``solve/verify.py``
         grounds it; ``uses`` and ``before`` atoms)."""
-        grounded = ground(prop, self.mission.task_graph, self.mission.domain, self.mission.constraints)
+        grounded = ground(prop, self.mission.task_graph, self.mission.domain, self.mission.constraints,
+                          self.mission.initial_state)
         by_vertex = {v.index: self.decomposition[v.decomposition.id] for v in self.mission.task_graph.decompositions()
                      if v.decomposition is not None}
         atoms = [self._any_of([by_vertex[v] for v in sorted(chosen)]) for chosen in grounded.atoms]

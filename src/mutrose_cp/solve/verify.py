@@ -1,64 +1,49 @@
 """Deciding properties over every valid mission decomposition, exactly, through the components.
 
-A property's formula is grounded first: each ``?variable`` takes every value that the task
-instances matching its patterns give it, and the formula holds when it holds for every such
-binding.  Each ``uses`` atom of the grounded formula is then a set of task decompositions (the
-atom is true of a mission decomposition that chooses one of them).  ``before(A, B)`` reads the
-order of the mission's sequential and fallback constraints (a graph built once, its paths the
-transitive order): each pair of an A and a B decomposition that it leaves unordered becomes
-``not (a and b)``.
+A property is grounded first (:mod:`.property_grounding`): its formula becomes the conjunction,
+over every binding of its variables, of formulas whose atoms are sets of task decompositions
+(an atom is true of a mission decomposition that chooses one of them).
 
-The decomposition space is a product of independent components, so a mission decomposition
-makes an atom true when one of its components' parts does.  Each component's solutions are
-folded into a histogram over atom vectors (which atoms the part makes true), and the
-histograms are combined by OR-convolution: with k atoms the state has at most 2^k vectors,
-whatever the number of decompositions.  The counts are exact (Python integers); a witness is
-kept per vector as one part per component.
+The decomposition space is a product of independent components, and each conjunct reads only
+the components its atoms' decompositions lie in.  The conjuncts are grouped by the components
+they share (connected components of a graph of conjuncts and components), and each group is
+decided on its own components alone: the verdict is the product of the groups' (``before`` per
+room of a 5000-room mission is 5000 small groups, never one formula over 5000 rooms).
 
-Components that no atom touches are counted, never listed.  A component an atom touches must be
-listed or layered; one that was only counted (too many solutions to list) is refused, named,
-rather than answered wrongly, and so is a property with more than ``MAX_ATOMS`` atoms after
-grounding.  ``robots(A) >= k`` is true when every chosen A decomposition's robot number
-allows only numbers that compare so.  Atoms over state (``finally``, ``initially-needed``) are
-refused with a message saying so.
+In a group, each component's solutions are folded into a histogram over atom vectors (which of
+the group's atoms the part makes true), and the histograms are combined by OR-convolution: the
+state has at most one entry per atom vector, whatever the number of decompositions.  The counts
+are exact (Python integers); a witness is kept per vector as one part per component.
+
+Components that no atom touches are counted, never listed.  A component an atom touches is
+folded through its layered graph when it has one (a forward pass that carries atom vectors
+instead of listing paths: exact for any number of solutions), else by listing its solutions;
+one that was only counted (too many solutions to list, no layered graph) is refused, named,
+rather than answered wrongly, and so is a group whose histogram would hold more than
+``MAX_VECTORS`` vectors.
 """
 from __future__ import annotations
 
 import itertools
-import operator
-from functools import cached_property
 from dataclasses import dataclass
-from typing import Callable, Iterable, Iterator, Literal, Mapping, Sequence
+from typing import Iterable, Iterator, Literal, Mapping, Sequence
 
 import networkx as nx
 
-from ..errors import MissionError, Problem
 from ..model.domain import Domain
-from ..model.goal_model import RobotNumber
-from ..model.properties import (
-    Before,
-    Formula,
-    Implies,
-    Junction,
-    Not,
-    Property,
-    Robots,
-    TaskPattern,
-    Uses,
-    atoms,
-    task_patterns,
-)
-from ..model.task_graph import Decomposition, TaskGraph
-from ..pipeline.constraints import FB, SEQ, Constraint
+from ..model.properties import Property
+from ..model.task_graph import TaskGraph
+from ..model.world import InitialState
+from ..pipeline.constraints import Constraint
 from .cpsat import Component, DecompositionSpace
+from .layered import LayeredSpace
+from .property_grounding import Grounded, GroundedProperty, ground, refusal
 
 Status = Literal["holds", "fails", "vacuous", "count"]
-#: at most this many atoms after grounding (the histograms have up to 2^k vectors)
-MAX_ATOMS = 16
+#: at most this many distinct atom vectors in one group's histogram
+MAX_VECTORS = 1 << 16
 #: at most this many solutions of one component are read to fold it (a layered one is listed)
 MAX_COMPONENT_SOLUTIONS = 200_000
-#: at most this many bindings of a property's variables
-MAX_BINDINGS = 4096
 
 
 @dataclass(frozen=True)
@@ -80,208 +65,191 @@ class Verdict:
 
 
 def verify(prop: Property, space: DecompositionSpace, tg: TaskGraph, domain: Domain,
-           constraints: Iterable[Constraint] = ()) -> Verdict:
+           constraints: Iterable[Constraint] = (), initial: InitialState | None = None) -> Verdict:
     """The verdict of ``prop`` over ``space`` (the mission's valid decompositions); ``before``
-    atoms read the mission's ``constraints``."""
-    grounded = ground(prop, tg, domain, constraints)
-    histogram, shared = _histogram(space, grounded.atoms, prop)
-    total = sum(count for count, _ in histogram.values())
-    if total == 0:
+    atoms read the mission's ``constraints``, ``finally`` atoms its ``initial`` state."""
+    return decide(prop, ground(prop, tg, domain, constraints, initial), space)
+
+
+def decide(prop: Property, grounded: GroundedProperty, space: DecompositionSpace) -> Verdict:
+    """The verdict of ``prop``, grounded, over ``space``."""
+    if not space.encoding.tasks or any(c.count == 0 for c in space.components):
         return Verdict(prop, "vacuous", 0, 0, None)
-    satisfied = {vector: entry for vector, entry in histogram.items() if _evaluate(grounded.formula, vector)}
-    count = sum(c for c, _ in satisfied.values())
-    broken = {vector: entry for vector, entry in histogram.items() if vector not in satisfied}
+    grouped = _groups(space, grounded)
+    groups = [_decide_group(prop, space, grounded, conjuncts, components) for conjuncts, components in grouped]
+    touched = {n for _, components in grouped for n in components}
+    untouched = [c for n, c in enumerate(space.components) if n not in touched]
+    shared = _shared_part(space, untouched)
+    others = 1
+    for component in untouched:
+        others *= component.count
+    total, count = others, others
+    for group in groups:
+        total *= group.total
+        count *= group.satisfied
+    status: Status
     if prop.quantifier == "count":
-        return Verdict(prop, "count", count, total, _first_witness(satisfied, shared))
-    if prop.quantifier == "always":
-        return Verdict(prop, "holds" if not broken else "fails", count, total, _first_witness(broken, shared))
-    if prop.quantifier == "never":
-        return Verdict(prop, "holds" if not satisfied else "fails", count, total, _first_witness(satisfied, shared))
-    return Verdict(prop, "holds" if satisfied else "fails", count, total, _first_witness(satisfied, shared))
+        status, chosen = "count", _all_satisfied(groups, count)
+    elif prop.quantifier == "always":
+        status = "holds" if count == total else "fails"
+        chosen = None if count == total else _one_broken(groups)
+    elif prop.quantifier == "never":
+        status, chosen = ("holds" if count == 0 else "fails"), _all_satisfied(groups, count)
+    else:
+        status, chosen = ("holds" if count else "fails"), _all_satisfied(groups, count)
+    witness = None if chosen is None or shared is None else tuple(sorted([*shared, *chosen]))
+    return Verdict(prop, status, count, total, witness)
 
 
-# --- grounding: every atom becomes a set of task decompositions ------------------------------
+# --- grouping: the conjuncts that share components are decided together ----------------------
+
+
+def _conjuncts(formula: Grounded) -> Iterator[Grounded]:
+    """The operands of ``formula``'s top-level conjunctions, nested ones spliced."""
+    if isinstance(formula, tuple) and formula[0] == "and":
+        for operand in formula[1]:
+            yield from _conjuncts(operand)
+    else:
+        yield formula
+
+
+def _atom_indices(formula: Grounded) -> Iterator[int]:
+    if isinstance(formula, int):
+        yield formula
+    else:
+        for operand in formula[1]:
+            yield from _atom_indices(operand)
+
+
+def _groups(space: DecompositionSpace, grounded: GroundedProperty) -> list[tuple[list[Grounded], list[int]]]:
+    """The conjuncts grouped by the components they read (connected through shared
+    components), each group with its components, in order of first conjunct; conjuncts that
+    read no component (their atoms are constant) form one group without components."""
+    component_of = {space.var_to_dec[v]: n for n, c in enumerate(space.components) for v in c.choice_vars}
+    reads: dict[int, set[int]] = {}
+    graph: "nx.Graph[tuple[str, int]]" = nx.Graph()
+    conjuncts = list(_conjuncts(grounded.formula))
+    constant: list[Grounded] = []
+    for i, conjunct in enumerate(conjuncts):
+        components = set()
+        for atom in _atom_indices(conjunct):
+            if atom not in reads:
+                reads[atom] = {n for d in grounded.atoms[atom] if (n := component_of.get(d)) is not None}
+            components |= reads[atom]
+        if not components:
+            constant.append(conjunct)
+        graph.add_edges_from((("conjunct", i), ("component", n)) for n in components)
+    groups = []
+    for connected in sorted(nx.connected_components(graph), key=lambda nodes: min(i for kind, i in nodes if kind == "conjunct")):
+        members = sorted(i for kind, i in connected if kind == "conjunct")
+        groups.append(([conjuncts[i] for i in members], sorted(n for kind, n in connected if kind == "component")))
+    if constant:
+        groups.insert(0, (constant, []))
+    return groups
+
+
+# --- one group: a histogram over its atom vectors, component by component ------------------
+
+Witness = tuple["Witness", tuple[int, ...]] | None  # (the parts before, this part), linked
+Histogram = dict[int, tuple[int, Witness]]  # atom vector -> (decompositions, one witness)
 
 
 @dataclass(frozen=True)
-class GroundedProperty:
-    """A property's formula over atoms that are sets of task decompositions (Task Graph
-    vertices): ``formula`` is an atom's index, or ``(operator, operands)`` with ``and``, ``or``
-    and ``not``.  What the embedding model posts (``DecompositionModel.add_property``)."""
+class _Group:
+    """A group of conjuncts decided on its components: how many of their joint solutions
+    satisfy the group's formula, of how many, and a witness part of each kind."""
 
-    formula: "Grounded"
-    atoms: tuple[frozenset[int], ...]
-
-
-def ground(prop: Property, tg: TaskGraph, domain: Domain, constraints: Iterable[Constraint] = ()) -> GroundedProperty:
-    """``prop``'s formula grounded on the mission (its quantifier is not part of it)."""
-    atoms = _Atoms(tg, domain, prop, constraints)
-    formula = atoms.ground(prop.formula)
-    return GroundedProperty(formula, tuple(atoms.sets))
+    satisfied: int
+    total: int
+    satisfying: tuple[int, ...] | None  # the group's decompositions in one that satisfies it
+    breaking: tuple[int, ...] | None  # ... and in one that does not
+    any_part: tuple[int, ...]
 
 
-Grounded = int | tuple[str, tuple["Grounded", ...]]  # an atom's bit, or (operator, operands)
+def _decide_group(prop: Property, space: DecompositionSpace, grounded: GroundedProperty,
+                  conjuncts: list[Grounded], components: list[int]) -> _Group:
+    used = sorted({a for c in conjuncts for a in _atom_indices(c)})
+    local = {atom: bit for bit, atom in enumerate(used)}
+    formula = _renumbered(("and", tuple(conjuncts)), local)
+    sets = [grounded.atoms[a] for a in used]
+    histogram: Histogram = {_vector(space.fixed, sets): (1, None)}
+    for number in components:
+        histogram = _combine(histogram, _component_histogram(space, space.components[number], number, sets, prop))
+        if len(histogram) > MAX_VECTORS:
+            raise refusal(prop, f"the parts of the mission it reads together take more than {MAX_VECTORS} "
+                                "combinations of its atoms")
+    satisfied = {v: e for v, e in histogram.items() if _evaluate(formula, v)}
+    broken = {v: e for v, e in histogram.items() if v not in satisfied}
+    return _Group(sum(c for c, _ in satisfied.values()), sum(c for c, _ in histogram.values()),
+                  _first_witness(satisfied), _first_witness(broken), _first_witness(histogram) or ())
 
 
-class _Atoms:
-    """The grounded atoms of one property: each a set of Task Graph decomposition vertices, kept
-    once however often it recurs."""
-
-    def __init__(self, tg: TaskGraph, domain: Domain, prop: Property, constraints: Iterable[Constraint]) -> None:
-        self.prop = prop
-        self.constraints = constraints
-        self.decompositions: list[tuple[int, Decomposition]] = []
-        for vertex in tg.decompositions():
-            assert vertex.decomposition is not None
-            self.decompositions.append((vertex.index, vertex.decomposition))
-        self.parameters = {t.name: tuple(p.name for p in t.parameters) for t in domain.tasks}
-        self.sets: list[frozenset[int]] = []
-        self.bit_of: dict[frozenset[int], int] = {}
-
-    def ground(self, formula: Formula) -> Grounded:
-        # a variable that only meets robot parameters (no value before allocation) or no
-        # instance at all takes no value: it stays a wildcard
-        candidates = {v: sorted(found) for v in sorted(set(_variables(formula)))
-                      if (found := self._values_of(formula, v))}
-        variables = list(candidates)
-        if not variables:
-            return self._ground(formula, {})
-        bindings = 1
-        for values in candidates.values():
-            bindings *= max(1, len(values))
-        if bindings > MAX_BINDINGS:
-            raise self.refused(f"its variables have {bindings} bindings, more than {MAX_BINDINGS}")
-        return ("and", tuple(self._ground(formula, dict(zip(variables, values)))
-                             for values in itertools.product(*candidates.values())))
-
-    def _ground(self, formula: Formula, binding: Mapping[str, str]) -> Grounded:
-        if isinstance(formula, Not):
-            return ("not", (self._ground(formula.operand, binding),))
-        if isinstance(formula, Junction):
-            return (formula.op, tuple(self._ground(f, binding) for f in formula.operands))
-        if isinstance(formula, Implies):
-            return ("or", (("not", (self._ground(formula.premise, binding),)), self._ground(formula.conclusion, binding)))
-        if isinstance(formula, Uses):
-            chosen = frozenset(v for v, d in self.decompositions if self._used(formula.target, d, binding))
-            if not chosen and isinstance(formula.target, tuple) and formula.target[0] == "decomposition":
-                raise self.refused(f"the mission has no task decomposition {formula.target[1]} "
-                                   "(the output names them, e.g. AT1_1|1)")
-            return self._bit(chosen)
-        if isinstance(formula, Before):
-            return self._before(formula, binding)
-        if isinstance(formula, Robots):
-            # every number the instance's robot number allows must compare so: [1,3] >= 2 does not
-            short = frozenset(v for v, d in self.decompositions if self._matches(formula.task, d, binding) is not None
-                              and not _robots_compare(d.instance.robot_number, formula.comparison, formula.bound))
-            return ("not", (self._bit(short),))
-        raise self.refused(f"{type(formula).__name__.lower()} atoms are not decided yet "
-                           "(uses, before and robots atoms are)")
-
-    def _before(self, formula: Before, binding: Mapping[str, str]) -> Grounded:
-        """No pair of chosen task decompositions, one of an A instance and one of a B instance,
-        that the constraints leave unordered: each such pair becomes ``not (a and b)``."""
-        firsts = [v for v, d in self.decompositions if self._matches(formula.first, d, binding) is not None]
-        seconds = [v for v, d in self.decompositions if self._matches(formula.second, d, binding) is not None]
-        pairs = [(a, b) for a in firsts for b in seconds
-                 if a != b and not (a in self.order and b in self.order and nx.has_path(self.order, a, b))]
-        return ("and", tuple(("not", (("and", (self._bit(frozenset([a])), self._bit(frozenset([b])))),))
-                             for a, b in pairs))
-
-    @cached_property
-    def order(self) -> "nx.DiGraph[int]":
-        """The sequential and fallback constraints between task decompositions, as a graph (its
-        paths are the transitive order), built once."""
-        graph: "nx.DiGraph[int]" = nx.DiGraph()
-        graph.add_edges_from((c.first, c.second) for c in self.constraints if c.kind in (SEQ, FB))
-        return graph
-
-    def _bit(self, decompositions: frozenset[int]) -> int:
-        if decompositions not in self.bit_of:
-            if len(self.sets) >= MAX_ATOMS:
-                raise self.refused(f"it grounds into more than {MAX_ATOMS} distinct atoms")
-            self.bit_of[decompositions] = len(self.sets)
-            self.sets.append(decompositions)
-        return self.bit_of[decompositions]
-
-    def _used(self, target: TaskPattern | tuple[str, str], d: Decomposition, binding: Mapping[str, str]) -> bool:
-        if isinstance(target, TaskPattern):
-            return self._matches(target, d, binding) is not None
-        kind, name = target
-        if kind == "decomposition":
-            return d.id == name
-        steps = d.path.actions
-        if kind == "action":
-            return any(s.name == name for s in steps)
-        if kind == "capability":
-            return any(name in s.capabilities for s in steps)
-        return name in _methods(d)
-
-    def _matches(self, pattern: TaskPattern, d: Decomposition, binding: Mapping[str, str]) -> dict[str, str] | None:
-        """The binding extended so that ``pattern`` matches ``d``'s task instance, or None."""
-        if d.instance.name != pattern.name:
-            return None
-        if pattern.arguments is None:
-            return dict(binding)
-        values = {p.hddl_param: str(p.value) for p in d.instance.parameters}
-        declared = self.parameters.get(pattern.name, ())
-        if len(pattern.arguments) > len(declared):
-            return None
-        extended = dict(binding)
-        for argument, parameter in zip(pattern.arguments, declared):
-            value = values.get(parameter, "")
-            if value == "":  # a robot parameter: no value before allocation, matches anything
-                continue
-            if argument.startswith("?"):
-                if extended.setdefault(argument, value) != value:
-                    return None
-            elif argument != value:
-                return None
-        return extended
-
-    def _values_of(self, formula: Formula, variable: str) -> set[str]:
-        return {bound[variable] for pattern in _patterns(formula) if variable in pattern.variables
-                for _, d in self.decompositions
-                if (bound := self._matches(pattern, d, {})) is not None and variable in bound}
-
-    def refused(self, why: str) -> MissionError:
-        return refusal(self.prop, why)
+def _renumbered(formula: Grounded, local: Mapping[int, int]) -> Grounded:
+    if isinstance(formula, int):
+        return local[formula]
+    return (formula[0], tuple(_renumbered(f, local) for f in formula[1]))
 
 
-def refusal(prop: Property, why: str) -> MissionError:
-    """The error of a property that is not decided (never answered approximately)."""
-    return MissionError(Problem(prop.where, f"property {prop.name}: cannot be verified: {why}"))
+def _vector(decompositions: Iterable[int], sets: Sequence[frozenset[int]]) -> int:
+    chosen = tuple(decompositions)
+    return sum(1 << bit for bit, atom in enumerate(sets) if not atom.isdisjoint(chosen))
 
 
-_COMPARE: dict[str, Callable[[int, int], bool]] = {
-    ">=": operator.ge, "<=": operator.le, "==": operator.eq, "!=": operator.ne, ">": operator.gt, "<": operator.lt}
+def _component_histogram(space: DecompositionSpace, component: Component, number: int,
+                         sets: Sequence[frozenset[int]], prop: Property) -> dict[int, tuple[int, tuple[int, ...]]]:
+    """One component's solutions folded by atom vector: through its layered graph when it has
+    one (:func:`_layered_histogram`, whatever its number of solutions), else by listing them."""
+    if component.layers is not None:
+        return _layered_histogram(component.layers, space.var_to_dec, sets, prop, number)
+    alternatives = space.alternatives(component)
+    if alternatives is None or component.count > MAX_COMPONENT_SOLUTIONS:
+        raise refusal(prop, f"part {number + 1} of the mission, which it reads, has {component.count} "
+                            f"alternative decompositions on its own (at most {MAX_COMPONENT_SOLUTIONS} are read)")
+    folded: dict[int, tuple[int, tuple[int, ...]]] = {}
+    for part in alternatives:
+        vector = _vector(part, sets)
+        count, example = folded.get(vector, (0, part))
+        folded[vector] = (count + 1, example)
+    return folded
 
 
-def _robots_compare(number: RobotNumber, comparison: str, bound: int) -> bool:
-    """Whether every robot number the instance allows compares so with ``bound``."""
-    allowed = (number.min, number.max)
-    return all(_COMPARE[comparison](n, bound) for n in allowed) if comparison != "!=" else \
-        not number.min <= bound <= number.max
+Path = tuple["Path", tuple[int, ...]] | None  # (the edges before, this edge's choices), linked
 
 
-def _methods(d: Decomposition) -> set[str]:
-    names: set[str] = set()
-    stack = [d.path.tree]
-    while stack:
-        node = stack.pop()
-        if node.kind == "method":
-            names.add(node.name)
-        stack.extend(node.children)
-    return names
+def _layered_histogram(layers: LayeredSpace, var_to_dec: Mapping[int, int], sets: Sequence[frozenset[int]],
+                       prop: Property, number: int) -> dict[int, tuple[int, tuple[int, ...]]]:
+    """A layered component's solutions folded by atom vector without listing them: a forward
+    pass over its blocks keeps, per state, how many paths reach it with each atom vector and one
+    such path, so the cost is the number of edges times the vectors per state."""
+    reached: list[dict[int, tuple[int, Path]]] = [{0: (1, None)} for _ in layers.states[0]]
+    for k, block in enumerate(layers.blocks):
+        after: list[dict[int, tuple[int, Path]]] = [{} for _ in layers.states[k + 1]]
+        for edge in block:
+            made = _vector((var_to_dec[v] for v in edge.choices), sets)
+            target = after[edge.target]
+            for vector, (count, path) in reached[edge.source].items():
+                total, example = target.get(vector | made, (0, (path, edge.choices)))
+                target[vector | made] = (total + count * edge.multiplicity, example)
+            if len(target) > MAX_VECTORS:
+                raise refusal(prop, f"part {number + 1} of the mission, which it reads, takes more than {MAX_VECTORS} "
+                                    "combinations of its atoms")
+        reached = after
+    folded: dict[int, tuple[int, tuple[int, ...]]] = {}
+    for vector, (count, path) in (reached[0].items() if reached else ()):
+        choices: list[int] = []
+        while path is not None:
+            path, step = path
+            choices.extend(step)
+        folded[vector] = (count, tuple(sorted(var_to_dec[v] for v in choices)))
+    return folded
 
 
-def _patterns(formula: Formula) -> Iterator[TaskPattern]:
-    for atom in atoms(formula):
-        yield from task_patterns(atom)
-
-
-def _variables(formula: Formula) -> Iterator[str]:
-    for pattern in _patterns(formula):
-        yield from pattern.variables
+def _combine(histogram: Histogram, component: Mapping[int, tuple[int, tuple[int, ...]]]) -> Histogram:
+    combined: Histogram = {}
+    for (v, (c, w)), (u, (k, part)) in itertools.product(histogram.items(), component.items()):
+        count, witness = combined.get(v | u, (0, (w, part)))
+        combined[v | u] = (count + c * k, witness)
+    return combined
 
 
 def _evaluate(formula: Grounded, vector: int) -> bool:
@@ -295,73 +263,45 @@ def _evaluate(formula: Grounded, vector: int) -> bool:
     return any(_evaluate(f, vector) for f in operands)
 
 
-# --- the histogram over atom vectors, component by component ---------------------------------
-
-Witness = tuple["Witness", tuple[int, ...]] | None  # (the parts before, this part), linked
-Histogram = dict[int, tuple[int, Witness]]  # atom vector -> (decompositions, one witness)
-
-
-def _vector(decompositions: Sequence[int], sets: Sequence[frozenset[int]]) -> int:
-    return sum(1 << bit for bit, chosen in enumerate(sets) if not chosen.isdisjoint(decompositions))
-
-
-def _histogram(space: DecompositionSpace, sets: Sequence[frozenset[int]],
-               prop: Property) -> tuple[Histogram, tuple[int, ...] | None]:
-    """The histogram over atom vectors of the whole space, and the part every witness shares
-    (one solution of each component no atom touches; None when one of them was only counted,
-    so that no witness can be written out)."""
-    if not space.encoding.tasks:
-        return {}, None
-    touched: frozenset[int] = frozenset().union(*sets)
-    fixed = tuple(space.fixed)
-    histogram: Histogram = {_vector(fixed, sets): (1, (None, fixed))}
-    shared: list[int] | None = []
-    for number, component in enumerate(space.components):
-        if component.count == 0:
-            return {}, None
-        own = {space.var_to_dec[v] for v in component.choice_vars}
-        if touched.isdisjoint(own):
-            histogram = {v: (c * component.count, w) for v, (c, w) in histogram.items()}
-            alternatives = space.alternatives(component)
-            if alternatives is None:
-                shared = None
-            elif shared is not None:
-                shared.extend(next(iter(alternatives)))
-            continue
-        histogram = _combine(histogram, _component_histogram(space, component, number, sets, prop))
-    return histogram, None if shared is None else tuple(shared)
-
-
-def _component_histogram(space: DecompositionSpace, component: Component, number: int,
-                         sets: Sequence[frozenset[int]], prop: Property) -> dict[int, tuple[int, tuple[int, ...]]]:
-    alternatives = space.alternatives(component)
-    if alternatives is None or component.count > MAX_COMPONENT_SOLUTIONS:
-        raise refusal(prop, f"part {number + 1} of the mission, which it reads, has {component.count} "
-                             f"alternative decompositions on its own (at most {MAX_COMPONENT_SOLUTIONS} are read)")
-    folded: dict[int, tuple[int, tuple[int, ...]]] = {}
-    for part in alternatives:
-        vector = _vector(part, sets)
-        count, example = folded.get(vector, (0, part))
-        folded[vector] = (count + 1, example)
-    return folded
-
-
-def _combine(histogram: Histogram, component: Mapping[int, tuple[int, tuple[int, ...]]]) -> Histogram:
-    combined: Histogram = {}
-    for (v, (c, w)), (u, (k, part)) in itertools.product(histogram.items(), component.items()):
-        count, witness = combined.get(v | u, (0, (w, part)))
-        combined[v | u] = (count + c * k, witness)
-    return combined
-
-
-def _first_witness(entries: Histogram, shared: tuple[int, ...] | None) -> tuple[int, ...] | None:
-    """The witness of the smallest vector among ``entries`` with the ``shared`` part, as sorted
-    decomposition vertices (None without entries or without a shared part)."""
-    if not entries or shared is None:
+def _first_witness(entries: Histogram) -> tuple[int, ...] | None:
+    """The parts of the smallest vector's witness among ``entries``, joined (None without
+    entries)."""
+    if not entries:
         return None
     node = entries[min(entries)][1]
-    chosen: list[int] = list(shared)
+    chosen: list[int] = []
     while node is not None:
         node, part = node
         chosen.extend(part)
-    return tuple(sorted(chosen))
+    return tuple(chosen)
+
+
+# --- the verdict's witness, from the groups' parts --------------------------------------------
+
+
+def _shared_part(space: DecompositionSpace, untouched: Sequence[Component]) -> list[int] | None:
+    """The decompositions every fixed task and untouched component contributes to a witness:
+    the fixed ones and one solution of each (None when one was only counted)."""
+    shared = list(space.fixed)
+    for component in untouched:
+        alternatives = space.alternatives(component)
+        if alternatives is None:
+            return None
+        shared.extend(next(iter(alternatives)))
+    return shared
+
+
+def _all_satisfied(groups: Sequence[_Group], count: int) -> list[int] | None:
+    """A decomposition that satisfies every group (None when none does)."""
+    if count == 0:
+        return None
+    return [d for g in groups for d in g.satisfying or ()]
+
+
+def _one_broken(groups: Sequence[_Group]) -> list[int] | None:
+    """A decomposition that breaks the first group that can be broken, any part elsewhere."""
+    for i, group in enumerate(groups):
+        if group.breaking is not None:
+            return [*(d for g in groups[:i] for d in g.any_part), *group.breaking,
+                    *(d for g in groups[i + 1:] for d in g.any_part)]
+    return None

@@ -1,0 +1,37 @@
+"""One mission decomposition read from an output file (``decompose``'s, the original's, or a
+witness that ``verify`` wrote), as the mission's Task Graph vertices, so that it can be drawn.
+
+The file's task keys are mapped to decomposition ids (``AT1_2|1``) and those to the mission's
+task decompositions; the result must be one of the mission's valid decompositions, or the file
+was written for another mission (or by hand) and drawing it would show something that cannot
+run.  Every refusal names the file and the place in it (exit status 2)."""
+from __future__ import annotations
+
+from ..errors import MissionError, Problem
+from ..io.decomposition_output import load_decomposition_output
+from ..pipeline.stages import MissionStages
+from ..solve import decomposers
+
+
+def listed_decomposition(mission: MissionStages, path: str, index: int = 0) -> list[int]:
+    """The decomposition vertices of mission decomposition ``index`` (0-based) listed in ``path``."""
+    output = load_decomposition_output(path)
+    listed = output.mission_decompositions
+    if not -len(listed) <= index < len(listed):
+        raise MissionError(Problem(path, f"mission_decompositions: no decomposition {index}: the file lists "
+                                         f"{len(listed)}"))
+    where = f"mission_decompositions[{index % len(listed)}]"
+    by_id = {v.decomposition.id: v.index for v in mission.task_graph.decompositions() if v.decomposition is not None}
+    chosen = []
+    for key in listed[index]:
+        task = output.tasks.get(key)
+        if task is None:
+            raise MissionError(Problem(path, f"{where}: task {key} is not in the file's tasks"))
+        if task.id not in by_id:
+            raise MissionError(Problem(path, f"{where}: {key} is task decomposition {task.id}, which this mission "
+                                             "does not have (was the file written for another mission?)"))
+        chosen.append(by_id[task.id])
+    if not decomposers.decomposition_space(mission).contains(chosen):
+        raise MissionError(Problem(path, f"{where}: not a valid decomposition of this mission "
+                                         "(mutrose-cp validate tells why)"))
+    return sorted(chosen)
