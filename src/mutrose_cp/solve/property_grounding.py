@@ -31,9 +31,7 @@ from __future__ import annotations
 import operator
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Callable, Iterable, Iterator, Mapping, Sequence
-
-import networkx as nx
+from typing import TYPE_CHECKING, Callable, Iterable, Iterator, Mapping, Sequence
 
 from ..errors import MissionError, Problem
 from ..model.domain import Comparison, Domain, Literal
@@ -58,6 +56,9 @@ from ..model.task_graph import Decomposition, TaskGraph
 from ..model.world import InitialState
 from ..pipeline.constraints import FB, SEQ, Constraint
 from .semantics import AtomKey, EffectScopes, Effects, effects_of, is_ground
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 #: at most this many bindings of a property's variables
 MAX_BINDINGS = 200_000
@@ -237,6 +238,8 @@ class _Grounding:
                              for a, b in pairs))
 
     def _ordered(self, a: int, b: int) -> bool:
+        import networkx as nx  # deferred: start-up time, for the properties that order tasks
+
         return a in self.order and b in self.order and nx.has_path(self.order, a, b)
 
     def _finally(self, fact: Fact, binding: Mapping[str, str]) -> Grounded:
@@ -340,6 +343,8 @@ class _Grounding:
     def order(self) -> "nx.DiGraph[int]":
         """The sequential and fallback constraints between task decompositions, as a graph (its
         paths are the transitive order), built once."""
+        import networkx as nx
+
         graph: "nx.DiGraph[int]" = nx.DiGraph()
         graph.add_edges_from((c.first, c.second) for c in self.constraints if c.kind in (SEQ, FB))
         return graph

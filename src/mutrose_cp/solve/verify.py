@@ -28,13 +28,12 @@ import itertools
 from dataclasses import dataclass
 from typing import Iterable, Iterator, Literal, Mapping, Sequence
 
-import networkx as nx
-
 from ..model.domain import Domain
 from ..model.properties import Property
 from ..model.task_graph import TaskGraph
 from ..model.world import InitialState
 from ..pipeline.constraints import Constraint
+from .boolean_model import VariableGroups
 from .cpsat import Component, DecompositionSpace
 from .layered import LayeredSpace
 from .property_grounding import Grounded, GroundedProperty, ground, refusal
@@ -123,29 +122,34 @@ def _atom_indices(formula: Grounded) -> Iterator[int]:
 
 def _groups(space: DecompositionSpace, grounded: GroundedProperty) -> list[tuple[list[Grounded], list[int]]]:
     """The conjuncts grouped by the components they read (connected through shared
-    components), each group with its components, in order of first conjunct; conjuncts that
-    read no component (their atoms are constant) form one group without components."""
+    components, by the model's union-find), each group with its components, in order of first
+    conjunct; conjuncts that read no component (their atoms are constant) form one group
+    without components, first."""
     component_of = {space.var_to_dec[v]: n for n, c in enumerate(space.components) for v in c.choice_vars}
     reads: dict[int, set[int]] = {}
-    graph: "nx.Graph[tuple[str, int]]" = nx.Graph()
+    joined = VariableGroups()
     conjuncts = list(_conjuncts(grounded.formula))
     constant: list[Grounded] = []
-    for i, conjunct in enumerate(conjuncts):
-        components = set()
+    read_by: list[list[int]] = []
+    for conjunct in conjuncts:
+        components: set[int] = set()
         for atom in _atom_indices(conjunct):
             if atom not in reads:
                 reads[atom] = {n for d in grounded.atoms[atom] if (n := component_of.get(d)) is not None}
             components |= reads[atom]
         if not components:
             constant.append(conjunct)
-        graph.add_edges_from((("conjunct", i), ("component", n)) for n in components)
-    groups = []
-    for connected in sorted(nx.connected_components(graph), key=lambda nodes: min(i for kind, i in nodes if kind == "conjunct")):
-        members = sorted(i for kind, i in connected if kind == "conjunct")
-        groups.append(([conjuncts[i] for i in members], sorted(n for kind, n in connected if kind == "component")))
-    if constant:
-        groups.insert(0, (constant, []))
-    return groups
+        ordered = sorted(components)
+        joined.join_all(ordered)
+        read_by.append(ordered)
+    groups: dict[int, tuple[list[Grounded], set[int]]] = {}
+    for conjunct, read in zip(conjuncts, read_by):
+        if read:
+            members, together = groups.setdefault(joined.find(read[0]), ([], set()))
+            members.append(conjunct)
+            together.update(read)
+    found = [(members, sorted(together)) for members, together in groups.values()]
+    return ([(constant, [])] if constant else []) + found
 
 
 # --- one group: a histogram over its atom vectors, component by component ------------------
