@@ -284,6 +284,16 @@ def run_plugin_calls(repeats: int, timeout: float, log) -> list[dict]:
     return rows
 
 
+def quick_run(doc: str | None, argv: list[str] | None) -> bool:
+    """A benchmark script's command line (``--quick``: its smallest sizes), read with the
+    package's bytecode compiled (:func:`compile_bytecode`)."""
+    parser = argparse.ArgumentParser(description=(doc or "").split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="the smallest sizes and the example only")
+    quick: bool = parser.parse_args(argv).quick
+    compile_bytecode()
+    return quick
+
+
 def compile_bytecode() -> None:
     """Compile the package's bytecode first, as ``pip install`` does for a regular install: an
     editable install run with ``PYTHONDONTWRITEBYTECODE`` would otherwise compile every module

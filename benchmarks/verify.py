@@ -21,7 +21,6 @@ is printed as Markdown for docs/benchmarks.md.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import tempfile
@@ -29,7 +28,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from generate import generate  # noqa: E402
-from run import compile_bytecode, measure  # noqa: E402
+from run import measure, quick_run  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "hospital-disinfection"
@@ -49,28 +48,25 @@ def run(inputs: list[str], prop: str, work: Path) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="n = 100 and the example only")
-    args = parser.parse_args(argv)
-    compile_bytecode()
+    quick = quick_run(__doc__, argv)
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         work = Path(folder)
-        for n in ([100] if args.quick else [100, 1000, 5000]):
+        for n in ([100] if quick else [100, 1000, 5000]):
             hddl, gm, cfg = generate("delivery", n, work / f"delivery-{n}")
             for prop in DELIVERY:
                 rows.append({"mission": f"delivery n={n}", **run([str(hddl), str(gm), str(cfg)], prop, work)})
-        for n in ([100] if args.quick else [100, 5000]):
+        for n in ([100] if quick else [100, 5000]):
             hddl, gm, cfg = generate("vital-signs", n, work / f"vital-signs-{n}")
             for prop in VITAL_SIGNS:
                 rows.append({"mission": f"vital signs n={n}", **run([str(hddl), str(gm), str(cfg)], prop, work)})
-        for n in ([30] if args.quick else [30, 200]):
+        for n in ([30] if quick else [30, 200]):
             hddl, gm, cfg = generate("coupled-sequence", n, work / f"coupled-sequence-{n}")
             for prop in COUPLED:
                 rows.append({"mission": f"coupled sequence n={n}", **run([str(hddl), str(gm), str(cfg)], prop, work)})
         for prop in HOSPITAL:
             rows.append({"mission": "examples/hospital-disinfection", **run([str(EXAMPLE)], prop, work)})
-    out = ROOT / "benchmarks" / "results" / ("verify-quick.json" if args.quick else "verify.json")
+    out = ROOT / "benchmarks" / "results" / ("verify-quick.json" if quick else "verify.json")
     out.write_text(json.dumps(rows, indent=1) + "\n")
     print("| mission | property | status | time | peak memory |\n|---|---|---|---|---|")
     for r in rows:

@@ -68,7 +68,9 @@ def test_example_decomposes(folder: Path, tmp_path: Path):
 
 
 @pytest.mark.parametrize(("folder", "count"), [(EXAMPLES / "hospital-disinfection", 36),
-                                               (EXAMPLES / "item-delivery", 8)], ids=lambda v: getattr(v, "name", v))
+                                               (EXAMPLES / "item-delivery", 8),
+                                               # 2 x 2: Room202 entered either way, Room203's dose given either way
+                                               (EXAMPLES / "medication-round", 4)], ids=lambda v: getattr(v, "name", v))
 def test_example_count(folder: Path, count: int, capsys):
     assert main(["count", str(folder), "-q"]) == 0
     assert capsys.readouterr().out.split() == [str(count)]

@@ -17,6 +17,7 @@ from .errors import MissionError, Problem
 from .io.config import load_configuration
 from .io.goal_model import load_goal_model
 from .io.hddl import load_domain
+from .io.uncertainty import read_uncertainty
 from .io.knowledge import load_knowledge
 from .io.mission_files import (
     chosen_world_file,
@@ -54,9 +55,11 @@ class Mission(MissionStages):
 
     @classmethod
     def load(cls, hddl: str | os.PathLike[str], gm: str | os.PathLike[str], config: str | os.PathLike[str], *,
-             lenient_xml: bool = False) -> "Mission":
+             lenient_xml: bool = False, uncertainty: str | os.PathLike[str] | None = None) -> "Mission":
         """Read and validate the four inputs (the world file is named by the configuration, unless
-        :func:`world_file` names another one).
+        :func:`world_file` names another one), and the uncertainty file ``uncertainty``
+        (docs/formats/uncertainty.md; :meth:`configured_uncertainty` is the one the configuration
+        names).
 
         All problems of the three named files are collected before raising, so one run reports
         everything that is wrong."""
@@ -88,7 +91,30 @@ class Mission(MissionStages):
         cross = cross_check(mission.domain, mission.goal_model, cfg)
         if cross:
             raise MissionError(cross)
+        if uncertainty is not None:
+            mission.read_uncertainty(uncertainty)
         return mission
+
+    def configured_uncertainty(self) -> Path | None:
+        """The uncertainty file the configuration names (its key ``uncertainty``), if any."""
+        named = self.config.uncertainty_path
+        return resolve_config_path(named, self.config_path) if named else None
+
+    def read_uncertainty(self, path: str | os.PathLike[str]) -> None:
+        """Read the uncertainty file at ``path``: its facts' values are then chosen by the
+        decomposer (``solve/uncertain.py``) instead of read from the world.  Before any stage
+        is computed: the initial state forgets them."""
+        if "initial_state" in self.__dict__:
+            raise RuntimeError("read_uncertainty after the initial state was computed")
+        entries, problems = read_uncertainty(path)
+        self.uncertainty_entries = tuple(entries)
+        self.uncertainty_source = os.fspath(path)
+        try:
+            _ = self.uncertainty  # resolved now: its problems are the inputs'
+        except MissionError as err:
+            problems.extend(err.problems)
+        if problems:  # in file order
+            raise MissionError(sorted(problems, key=lambda p: (p.record()["line"] or 0, p.record()["column"] or 0)))
 
     # -- the decomposers (solve/) --------------------------------------------------------------
     def exploratory(self, progress: Callable[[int, int], None] | None = None) -> list[list[int]]:

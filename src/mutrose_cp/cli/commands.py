@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..output.counts import shown_count
-from ..errors import MissionError, Problem
+from ..errors import MissionError, NoDecompositionError, Problem
 from ..interrupt import phase
 from ..mission import Mission
 from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
@@ -29,6 +29,7 @@ from ..solve.optimize import CostModel
 if TYPE_CHECKING:
     from ..allocate.fleet import Fleet
     from ..allocate.travel import TravelTimes
+    from ..output.uncertainty_section import UncertaintyRecord
 
 
 
@@ -74,6 +75,8 @@ def _summary(args: argparse.Namespace, data: dict[str, object], line: str, missi
     if mission is not None:
         files = {"hddl": mission.domain.source, "gm": mission.goal_model.source,
                  "configuration": str(mission.config_path), "world": str(mission.world_path or "")}
+        if mission.uncertainty_source:
+            files["uncertainty"] = mission.uncertainty_source
         data = {**data, "inputs": files}
         line += "\n  read: " + ", ".join(f"{k} {v}" for k, v in files.items())
     if getattr(args, "json_summary", False):
@@ -86,6 +89,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     hddl, gm, cfg, folder = mission_paths(args)
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
+    uncertain = args.uncertain or (None if args.as_written else mission.configured_uncertainty())
+    if uncertain:
+        mission.read_uncertainty(uncertain)
     base = (folder if folder is not None else cfg.parent.parent).resolve()
     written = (base / mission.config.output.file_path).resolve()
     if base != written and base not in written.parents:
@@ -107,8 +113,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "check", "valid": True, "task_instances": len(exp.instances),
                     "seconds": round(elapsed, 3)},
-             f"ok: {hddl.name}, {gm.name}, {cfg.name} are valid ({len(exp.instances)} task instances, "
-             f"{elapsed:.2f} s)", mission)
+             f"ok: {hddl.name}, {gm.name}, {cfg.name} are valid ({len(exp.instances)} task instances"
+             + (f", {len(mission.uncertainty.facts)} uncertain facts" if mission.uncertainty is not None else "")
+             + f", {elapsed:.2f} s)", mission)
     return 0
 
 
@@ -312,7 +319,11 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         raise MissionError("-o - writes the output to standard output: drop --json-summary, which prints there too")
     if args.sample is not None and (args.optimize or args.limit != DEFAULT_LIMIT):
         raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
-    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
+    if args.most_likely and (args.sample is not None or args.optimize):
+        raise MissionError("--most-likely chooses one decomposition: it cannot be combined with --sample or --optimize")
+    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet, uncertain=args.uncertain,
+                           reads_uncertainty=True, as_written=args.as_written)
+    _refuse_uncertainty_options(args, mission)
     mission.progress = _Progress(not args.quiet).stage
     # where and how the output goes is settled, and refused if unsafe, before any work
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
@@ -330,9 +341,10 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         print("warning: the mission has no task instances (no entity of the world matched its queries): "
               "nothing to decompose", file=sys.stderr)
     model = OutputModel(tg, constraints, [], mission.domain, mission.config, mission.initial_state)
+    record = None
     if args.ihtn:
         with phase("solving"):
-            result = mission.decompose(request, progress)
+            result, record = _solve(args, mission, request, progress)
         from ..output.ihtn import refuse_oversized_export, write_ihtns
 
         model.decompositions = list(result.decompositions)
@@ -348,9 +360,11 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         # the task entries and constraints may be written by a second process while solving
         with output_while_solving(model, out_path, file_type, args.json_style) as finish:
             with phase("solving"):
-                result = mission.decompose(request, progress)
+                result, record = _solve(args, mission, request, progress)
             with phase("writing the output"):
-                finish(result.decompositions, result.space_section(tg.decomposition_keys.__getitem__))
+                listed = result.decompositions if record is None else record.listed(result.decompositions)
+                model.uncertainty = None if record is None else record.section
+                finish(listed, result.space_section(tg.decomposition_keys.__getitem__))
     keep_until_exit(mission, model, result)
     total, note = result.total, _note(request, result)
     elapsed = time.perf_counter() - start
@@ -376,6 +390,39 @@ def cmd_decompose(args: argparse.Namespace) -> int:
 
 
 OUTPUT_SUFFIXES = {".json": "json", ".xml": "xml"}
+
+
+def _refuse_uncertainty_options(args: argparse.Namespace, mission: Mission) -> None:
+    """The options that need an uncertainty file, and the decomposer that does not read one."""
+    if mission.uncertainty is None and (args.robust or args.most_likely):
+        raise MissionError(f"--{'robust' if args.robust else 'most-likely'} chooses among decompositions under uncertain "
+                           "facts: give --uncertain FILE, or name one in the configuration (docs/formats/uncertainty.md)")
+    if mission.uncertainty is not None and args.algorithm == "exploratory":
+        raise MissionError("uncertain facts are decided by the CP-SAT decomposer (the default): drop --algorithm "
+                           "exploratory, or the uncertainty file")
+
+
+def _solve(args: argparse.Namespace, mission: Mission, request: DecompositionRequest,
+           progress: "_Progress") -> tuple[DecompositionResult, "UncertaintyRecord | None"]:
+    """The decompositions the request asks for, and with uncertain facts what each assumes."""
+    if mission.uncertainty is None:
+        return mission.decompose(request, progress), None
+    from ..output.uncertainty_section import UncertaintyRecord
+    from ..solve.decompose import answer
+    from ..solve.uncertain import uncertain_space
+
+    uncertain = uncertain_space(mission)
+    space = uncertain.space(robust=args.robust)
+    if space.count == 0:
+        raise NoDecompositionError("no mission decomposition is valid " + (
+            "whatever the uncertain facts are (count --possible counts those valid for some value; explain says "
+            "which facts to sense)" if args.robust else "for any value of the uncertain facts"),
+            str(mission.goal_model.source))
+    if args.most_likely:
+        costs = CostModel.read(args.costs) if args.costs else CostModel()
+        chosen, _probability = uncertain.most_likely(costs.decomposition_costs(mission.task_graph))
+        return DecompositionResult(Algorithm.CPSAT, [chosen], space.count, space), UncertaintyRecord(uncertain)
+    return answer(mission, space, request), UncertaintyRecord(uncertain)
 
 
 def _output_format(args: argparse.Namespace, mission: Mission) -> str:
@@ -421,9 +468,15 @@ def cmd_graph(args: argparse.Namespace) -> int:
 def cmd_count(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = mission_paths(args)
     start = time.perf_counter()
-    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
+    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet, uncertain=args.uncertain,
+                           reads_uncertainty=True, as_written=args.as_written)
     with phase("expanding the mission"):
         _ = mission.constraints
+    if mission.uncertainty is not None:
+        return _count_uncertain(args, mission, start)
+    if args.robust or args.possible:
+        raise MissionError(f"--{'robust' if args.robust else 'possible'} counts decompositions under uncertain facts: "
+                           "give --uncertain FILE, or name one in the configuration (docs/formats/uncertainty.md)")
     with phase("solving"):
         space = mission.decomposition_space(_Progress(not args.quiet, "components solved"), keep=False)
         total = space.count
@@ -436,6 +489,37 @@ def cmd_count(args: argparse.Namespace) -> int:
     print(total)  # the bare count is the last line of stdout
     # like decompose: a mission whose tasks admit no valid combination is an error (status 3)
     return 3 if total == 0 and mission.task_graph.tasks() else 0
+
+
+def _count_uncertain(args: argparse.Namespace, mission: Mission, start: float) -> int:
+    """``count`` with uncertain facts: the decompositions valid for some value of them (or, with
+    ``--robust``, whatever their values); the summary gives both."""
+    from ..solve.uncertain import uncertain_space
+
+    with phase("solving"):
+        space = uncertain_space(mission)
+        robust, possible = space.bounds(robust=True), space.bounds(robust=False)
+    low, high = robust if args.robust else possible
+    elapsed = time.perf_counter() - start
+    facts = len(mission.uncertainty.facts) if mission.uncertainty is not None else 0
+
+    def shown(bounds: tuple[int, int]) -> str:
+        low, high = bounds
+        return shown_count(low, digit_count=True) if low == high else \
+            f"between {shown_count(low, digit_count=True)} and {shown_count(high, digit_count=True)}"
+    line = (f"counted: {shown(possible)} mission decompositions valid for some value of the {facts} uncertain facts, "
+            f"{shown(robust)} of them whatever their values ({elapsed:.2f} s)")
+    for c in space.components:
+        if c.bounds is not None:
+            line += f"\n  bounds, not exact counts: {c.unlisted}"
+    _summary(args, {"command": "count", "mission_decompositions": str(low) if low == high else f"{low}..{high}",
+                    "exact": low == high, "robust": [str(n) for n in robust], "possible": [str(n) for n in possible],
+                    "uncertain_facts": facts, "components": len(space.components), "seconds": round(elapsed, 3)},
+             line, mission)
+    sys.stderr.flush()
+    print(low if low == high else f"{low}..{high}")  # the bare count, or its bounds, is the last line
+    # no robust decomposition is an answer; none valid for any value of the facts is status 3
+    return 3 if possible[1] == 0 and mission.task_graph.tasks() else 0
 
 
 def cmd_compare(args: argparse.Namespace) -> int:

@@ -40,10 +40,21 @@ def print_warning(warning: str) -> None:
 
 
 def load_mission(hddl: PathArgument, gm: PathArgument, cfg: PathArgument, *, lenient_xml: bool,
-                 quiet: bool = False) -> Mission:
+                 quiet: bool = False, uncertain: PathArgument | None = None, reads_uncertainty: bool = False,
+                 as_written: bool = False) -> Mission:
     """The mission, with the warnings of loading printed now and those of later stages as they
-    are found (none with ``quiet``)."""
+    are found (none with ``quiet``).  A command that ``reads_uncertainty`` reads the uncertainty
+    file ``uncertain`` or the one the configuration names (unless ``as_written``); another says
+    that it reads the world as written."""
     mission = Mission.load(hddl, gm, cfg, lenient_xml=lenient_xml)
+    configured = mission.configured_uncertainty()
+    if as_written:
+        configured = None
+    if reads_uncertainty and (uncertain or configured):
+        mission.read_uncertainty(uncertain or configured)  # type: ignore[arg-type]
+    elif configured is not None and not quiet:
+        print_warning(f"{mission.config.locate('uncertainty')}: this command does not read the uncertainty file "
+                      f"{configured}: the world is read as written")
     if not quiet:
         report_warnings(mission)
     return mission
@@ -60,7 +71,8 @@ def refuse_outputs(outputs: Sequence[PathArgument | None], mission: Mission,
                    inputs: Sequence[PathArgument | None], folders: Sequence[PathArgument | None] = ()) -> None:
     """Outputs that are inputs of the mission (the world included) or one another, or folders:
     refused before anything is computed or written (``output.files.refuse_unsafe_outputs``)."""
-    refuse_unsafe_outputs(outputs, (*inputs, mission.world_path), folders)
+    uncertainty = mission.uncertainty_source or None
+    refuse_unsafe_outputs(outputs, (*inputs, mission.world_path, uncertainty), folders)
 
 
 def expanded(mission: Mission) -> tuple[TaskGraph, Constraints]:

@@ -30,6 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_graph_parser(sub)
     add_export_hddl_parser(sub)
     add_verify_parser(sub)
+    add_explain_parser(sub)
     add_batch_parser(sub)
     return parser
 
@@ -62,10 +63,21 @@ def common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json-summary", action="store_true", help="print a machine-readable summary on stdout")
 
 
+def uncertain_world(p: argparse.ArgumentParser) -> None:
+    """The uncertainty file of the commands that read one (docs/formats/uncertainty.md)."""
+    given = p.add_mutually_exclusive_group()
+    given.add_argument("--uncertain", metavar="FILE", type=input_file,
+                       help="world facts that are not known for sure, with their probabilities (default: the file "
+                            "the configuration's key 'uncertainty' names, if any)")
+    given.add_argument("--as-written", action="store_true",
+                       help="read the world as written, without the uncertainty file the configuration names")
+
+
 def add_check_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     """``check``: validate the mission inputs and report every problem found."""
     p = sub.add_parser("check", help="validate the mission inputs and report every problem found")
     common(p)
+    uncertain_world(p)
     p.add_argument("--strict", action="store_true", help="treat every warning as an error (exit 2)")
     p.add_argument("--fleet", metavar="FLEET.json", type=input_file, help="also check a fleet file against the mission")
     p.add_argument("--properties", metavar="FILE", type=input_file,
@@ -103,6 +115,12 @@ def add_decompose_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParse
                    help="--ihtn: every ordering of each decomposition (default), or only the first consistent one")
     p.add_argument("--ihtn-max", type=count_option(1), default=DEFAULT_MAX_FILES, metavar="N",
                    help="--ihtn: refuse (exit 2) an export of more than N files (default 10000)")
+    uncertain_world(p)
+    listed = p.add_mutually_exclusive_group()
+    listed.add_argument("--robust", action="store_true",
+                        help="with uncertain facts: only the decompositions valid whatever their values")
+    listed.add_argument("--most-likely", action="store_true",
+                        help="with uncertain facts: the decomposition most likely to be valid (ties: the least cost)")
 
 
 def add_allocate_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
@@ -135,6 +153,19 @@ def add_count_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]")
     """``count``: print the exact number of valid mission decompositions."""
     p = sub.add_parser("count", help="print the exact number of valid mission decompositions")
     common(p)
+    uncertain_world(p)
+    which = p.add_mutually_exclusive_group()
+    which.add_argument("--robust", action="store_true",
+                       help="with uncertain facts: count the decompositions valid whatever their values")
+    which.add_argument("--possible", action="store_true",
+                       help="with uncertain facts: count those valid for some value of them (the default)")
+
+
+def add_explain_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """``explain``: what the uncertain facts decide, and which to sense first."""
+    p = sub.add_parser("explain", help="with uncertain facts: which of them to sense first")
+    common(p)
+    uncertain_world(p)
 
 
 def add_validate_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:

@@ -45,6 +45,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "graph": ("mutrose_cp.cli.commands", "cmd_graph"),
     "export-hddl": ("mutrose_cp.cli.commands", "cmd_export_hddl"),
     "verify": ("mutrose_cp.cli.verify", "cmd_verify"),
+    "explain": ("mutrose_cp.cli.uncertain", "cmd_explain"),
     "batch": ("mutrose_cp.cli.batch.command", "cmd_batch"),
 }
 

@@ -136,7 +136,8 @@ def run_ours(request: CompareRequest, decomposer: str, work: Path) -> Run:
     out = work / f"{decomposer}.json"
     command = [sys.executable, "-m", "mutrose_cp", "decompose", str(request.hddl), str(request.gm),
                str(request.config), "-q", "--json-summary", "-o", str(out), "--format", "json",
-               "--max-input-mb", str(request.max_input_mb), "--algorithm", decomposer]
+               "--max-input-mb", str(request.max_input_mb), "--algorithm", decomposer,
+               "--as-written"]  # both decomposers read the world as written: the exploratory one knows no uncertainty
     if decomposer == "cpsat":
         command += ["--limit", str(request.limit or 0)]
     if request.lenient_xml:

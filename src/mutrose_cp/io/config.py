@@ -235,6 +235,10 @@ class _Builder:
         type_mapping = self.type_mapping(data.get("type_mapping", []))
         var_mapping = self.var_mapping(data)
         semantic = self.semantic_mapping(data)
+        uncertainty = data.get("uncertainty")
+        if uncertainty is not None and (not isinstance(uncertainty, str) or not uncertainty.strip()):
+            self.problem("uncertainty", "expected the path of an uncertainty file (docs/formats/uncertainty.md)")
+            uncertainty = None
         if self.problems or world_db is None or output is None:
             raise MissionError(self.problems)
         return Configuration(
@@ -247,6 +251,7 @@ class _Builder:
             var_mapping=var_mapping,
             semantic_mapping=semantic,
             warnings=tuple(self.warnings),
+            uncertainty_path=uncertainty.strip() if uncertainty else None,
         )
 
     def world_db(self, data: dict[str, Any]) -> WorldDbConfig | None:

@@ -74,6 +74,9 @@ class Configuration:
     var_mapping: tuple[VarMapping, ...]
     semantic_mapping: tuple[SemanticMapping, ...]
     warnings: tuple[str, ...] = ()  # located, non-fatal remarks (e.g. missing xml_root)
+    # an uncertainty file (docs/formats/uncertainty.md), relative to the configuration; the
+    # original ignores the key
+    uncertainty_path: str | None = None
 
     def locate(self, key_path: str) -> str:
         """``Problem.where`` for a key path such as ``SemanticMapping.where``

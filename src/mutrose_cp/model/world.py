@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Collection
 
 from lxml import etree
 
@@ -152,6 +153,12 @@ class InitialState:
         for key, value in self.functions:
             index.setdefault(key, value)
         return index
+
+    def forgetting(self, atoms: Collection[tuple[str, tuple[str, ...]]]) -> "InitialState":
+        """This state with ``atoms`` unknown: their literals and values dropped (the uncertain
+        facts of docs/formats/uncertainty.md, whose values the decomposer then chooses)."""
+        return InitialState(self.sorts, tuple(lit for lit in self.literals if (lit.predicate, lit.args) not in atoms),
+                            tuple(f for f in self.functions if f[0] not in atoms), self.warnings)
 
     def fact_map(self) -> dict[tuple[str, tuple[str, ...]], bool]:
         """Every known atom and its polarity (the first literal of an atom decides), a copy to

@@ -8,7 +8,7 @@ never leaves a half-written output.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import IO, Any, Iterable, Mapping, Sequence
+from typing import IO, Any, Callable, Iterable, Mapping, Sequence
 
 from .boost_json import Tree, write_list, boost_json, write_boost_json
 from .constraint_texts import constraint_texts
@@ -42,6 +42,9 @@ class OutputModel:
     config: Configuration
     state: InitialState
     space: Mapping[str, Any] | None = None  # optional mission_decomposition_space section
+    # optional mission_decomposition_uncertainty section, made once the listing is written
+    # (its argument: the standard JSON style)
+    uncertainty: Callable[[bool], Mapping[str, Any]] | None = None
 
 
 class OutputBuilder:
@@ -131,6 +134,9 @@ class OutputBuilder:
         if self.m.space is not None:
             fh.write(",\n    \"mission_decomposition_space\": ")
             write_boost_json(self.m.space, fh, 4)
+        if self.m.uncertainty is not None:
+            fh.write(",\n    \"mission_decomposition_uncertainty\": ")
+            write_boost_json(self.m.uncertainty(False), fh, 4)
         fh.write("\n}\n")
 
     # -- XML -----------------------------------------------------------------------------------

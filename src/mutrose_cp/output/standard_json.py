@@ -85,4 +85,6 @@ def write_standard_json(builder: OutputBuilder, fh: IO[str]) -> None:
     _write_items(fh, (_dumps(md, 8) for md in _decompositions(builder)), "[", "]")
     if builder.m.space is not None:
         fh.write(',\n    "mission_decomposition_space": ' + _dumps(_space(builder.m.space), 4))
+    if builder.m.uncertainty is not None:
+        fh.write(',\n    "mission_decomposition_uncertainty": ' + _dumps(builder.m.uncertainty(True), 4))
     fh.write("\n}\n")

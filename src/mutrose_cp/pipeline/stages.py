@@ -19,7 +19,9 @@ from ..io.mission_files import resolve_output_path
 from ..model import Configuration, Domain, GoalModel, InitialState, WorldKnowledge
 from ..model.task_graph import TaskGraph
 from .task_graph_builder import build_task_graph
-from .initial_state import build_initial_state
+from .initial_state import build_initial_state, build_sorts
+from .uncertain_facts import resolve_uncertainty
+from ..model.uncertainty import UncertainEntry, Uncertainty
 from .recursion import deep
 
 
@@ -39,10 +41,28 @@ class MissionStages:
     # where a warning found by a later stage goes as it is found (the loaders' are in
     # ``warnings`` before any stage runs; a later one is added there too)
     report_warning: Callable[[str], None] | None = None
+    # the entries of an uncertainty file and its name (docs/formats/uncertainty.md); None: the
+    # world is read as it is written
+    uncertainty_entries: tuple[UncertainEntry, ...] | None = None
+    uncertainty_source: str = ""
+
+    @cached_property
+    def uncertainty(self) -> Uncertainty | None:
+        """The uncertain facts, resolved against the mission (None without an uncertainty file)."""
+        if self.uncertainty_entries is None:
+            return None
+        sorts = build_sorts(self.domain, self.config, self.knowledge)
+        return resolve_uncertainty(self.uncertainty_entries, self.uncertainty_source, self.config, sorts,
+                                   self.goal_model)
 
     @cached_property
     def initial_state(self) -> InitialState:
-        return build_initial_state(self.domain, self.config, self.knowledge)
+        """The world's initial state; an uncertain fact's value is left unknown here, for the
+        decomposer to choose (``solve/uncertain.py``)."""
+        state = build_initial_state(self.domain, self.config, self.knowledge)
+        if self.uncertainty is not None:
+            state = state.forgetting({f.atom for f in self.uncertainty.facts})
+        return state
 
     @cached_property
     @deep

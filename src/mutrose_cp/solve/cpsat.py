@@ -447,16 +447,25 @@ def _canonical(r: Record, lit: Callable[[Lit], int | Const], cid: Callable[[int]
 def build_space(enc: Encoding, keep: bool = True, progress: Callable[[int, int], None] | None = None,
                 list_limit: int = ENUMERATION_CAP) -> DecompositionSpace:
     comps = split_components(enc)
-    # components that are identical up to renaming (one per forAll instance) are solved once
+    solve_components(enc.model, comps, keep, list_limit, progress)
+    var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
+    # components without decomposition literals only constrain (e.g. all-constant checks)
+    return DecompositionSpace(enc, [c for c in comps if c.choice_vars or c.count == 0], var_to_dec)
+
+
+def solve_components(bm: BoolModel, comps: Sequence[Component], keep: bool = True, list_limit: int = ENUMERATION_CAP,
+                     progress: Callable[[int, int], None] | None = None) -> None:
+    """Solve every component (:func:`solve_component`); components that are identical up to
+    renaming their variables (one per forAll instance) are solved once and renamed."""
     solved: dict[tuple[object, ...], tuple[list[int], Component]] = {}
     for i, comp in enumerate(comps):
         if comp.count == 0 and comp.solutions == []:
             pass
         elif len(comp.records) > 1:
-            key, order = _signature(enc.model, comp)
+            key, order = _signature(bm, comp)
             hit = solved.get(key)
             if hit is None:
-                solve_component(enc.model, comp, keep, list_limit)
+                solve_component(bm, comp, keep, list_limit)
                 solved[key] = (order, comp)
             else:
                 first_order, first = hit
@@ -466,12 +475,9 @@ def build_space(enc: Encoding, keep: bool = True, progress: Callable[[int, int],
                 comp.solutions = (None if first.solutions is None else
                                   sorted((frozenset(rename[v] for v in sol) for sol in first.solutions), key=sorted))
         else:
-            solve_component(enc.model, comp, keep, list_limit)
+            solve_component(bm, comp, keep, list_limit)
         if progress is not None:
             progress(i + 1, len(comps))
-    var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
-    # components without decomposition literals only constrain (e.g. all-constant checks)
-    return DecompositionSpace(enc, [c for c in comps if c.choice_vars or c.count == 0], var_to_dec)
 
 
 def explain(enc: Encoding) -> list[str]:

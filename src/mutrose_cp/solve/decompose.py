@@ -100,6 +100,13 @@ def decompose(mission: MissionStages, request: DecompositionRequest,
     space = decomposers.decomposition_space(mission, progress, list_limit=OPTIMIZE_LIST_LIMIT if request.optimize else None)
     if space.count == 0:
         raise _nothing_valid(mission, request.explain)
+    return answer(mission, space, request)
+
+
+def answer(mission: MissionStages, space: DecompositionSpace, request: DecompositionRequest) -> DecompositionResult:
+    """``request`` answered over ``space``, which has decompositions: the least-cost one, a
+    sample, or the first ones listed (``space`` may be a part of the mission's, such as its
+    robust decompositions in an uncertain world)."""
     if request.optimize:
         chosen, cost = least_cost(space, request.costs.decomposition_costs(mission.task_graph))
         return DecompositionResult(request.algorithm, [chosen], space.count, space, optimum=(chosen, cost))

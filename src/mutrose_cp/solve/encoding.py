@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Collection, Iterable, Sequence
 
 from ..model.state_tests import AllOf, FactTest, Test, ValueTest
 from ..pipeline.conditions import compare
@@ -62,11 +62,14 @@ class Encoding:
     or_choice_lit: dict[tuple[int, int], Lit]  # (OR operator vertex, child vertex) -> literal
     tasks: list[int]  # task vertices in mission-queue order
     labels: dict[str, str] = field(default_factory=dict)  # record label -> explanation
+    # uncertain fact -> its variable, the fact's value at the start (docs/formats/uncertainty.md)
+    uncertain: dict[AtomKey, int] = field(default_factory=dict)
 
 
 # How the encoder's variables are named: the parts of a name are kept, and the text is made
 # when it is read (BoolModel.name).  A name's parts are (kind, atom or None, vertex, extra).
-OR_CHOICE, AFTER, KNOWN_AFTER, COMPARED, CONTEXT, PRECONDITION, ACHIEVE, SET_BELOW, CLEARED_BELOW, OFFSET_GAP = range(10)
+OR_CHOICE, AFTER, KNOWN_AFTER, COMPARED, CONTEXT, PRECONDITION, ACHIEVE, SET_BELOW, CLEARED_BELOW, OFFSET_GAP, \
+    UNCERTAIN = range(11)
 
 
 _NAMES: dict[int, Callable[[TaskGraph, Any, int, Any], str]] = {  # kind -> (tg, atom, vertex, extra) -> text
@@ -78,6 +81,7 @@ _NAMES: dict[int, Callable[[TaskGraph, Any, int, Any], str]] = {  # kind -> (tg,
     PRECONDITION: lambda tg, _, d, __: f"pre({tg.decomposition(d).decomposition.id})",
     ACHIEVE: lambda tg, _, v, goal: f"achieve({goal}@{v})",
     SET_BELOW: lambda tg, atom, v, _: f"{_atom_name(atom)} set below {v}",
+    UNCERTAIN: lambda tg, atom, _, __: f"{_atom_name(atom)} at the start",
     CLEARED_BELOW: lambda tg, atom, v, _: f"{_atom_name(atom)} cleared below {v}",
     OFFSET_GAP: lambda tg, atom, _, pair: f"{_atom_name(atom)} offset gap {pair[0]}-{pair[1]}",
 }
@@ -93,12 +97,17 @@ class Encoder(EncodingState):
     """Builds the :class:`Encoding` of a Task Graph with the exploratory algorithm's semantics."""
 
     def __init__(self, tg: TaskGraph, constraints: Sequence[Constraint], domain: Domain, gm: GoalModel,
-                 config: Configuration, initial: InitialState, explain: bool = False, replay: bool = True) -> None:
+                 config: Configuration, initial: InitialState, explain: bool = False, replay: bool = True,
+                 uncertain: Collection[AtomKey] = ()) -> None:
         super().__init__(tg, constraints, domain, gm, config, initial, explain,
                          model=BoolModel(namer=functools.partial(variable_name, tg)))
         # stamped copies replay a leader's records (.replay); explaining labels every record by
-        # its own vertices, so it encodes each copy in full
-        self._replaying = replay and not explain
+        # its own vertices, so it encodes each copy in full, and so does a mission with uncertain
+        # facts (a copy's class does not say which of its atoms are uncertain)
+        self._replaying = replay and not explain and not uncertain
+        # boolean facts whose start value is a free variable, made when first read
+        self.uncertain_atoms = frozenset(uncertain)
+        self.uncertain: dict[AtomKey, int] = {}
         self._replay: CopyReplay | None = None  # while encoding
         self.replayed: tuple[int, int] = (0, 0)  # copies that replayed their task rules, classes that led them
         # the comparisons required of values the world does not give, by atom (.numeric)
@@ -121,7 +130,7 @@ class Encoder(EncodingState):
                 self.replayed = self._replay.summary()
         finally:
             self._replay = None  # it refers back to the encoder: let both go with the encoder
-        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
+        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels, self.uncertain)
 
     def _each(self, phase: int, vertices: Sequence[int], encode: Callable[[int], None]) -> None:
         """``encode`` each vertex in order; a stamped copy's run of vertices goes to the replay."""
@@ -164,7 +173,7 @@ class Encoder(EncodingState):
                         f"pre:{d.content}", f"{d.content}: a precondition is false in the initial world state, "
                                             "or an achieve condition after it")))
         self.m.records.append(Exactly(tuple(all_x), TRUE, label="unique-branch"))
-        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels)
+        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels, self.uncertain)
 
     def _label(self, key_and_text: Callable[[], tuple[str, str]]) -> str:
         """The label of a record, with its explanation kept, when explaining; else none.  The
@@ -251,8 +260,16 @@ class Encoder(EncodingState):
         return step
 
     def _bool_start(self, atom: AtomKey) -> tuple[Lit, Lit]:
+        if atom in self.uncertain_atoms:
+            return TRUE, self._uncertain(atom)
         init = self.facts.get(atom)
         return (FALSE if init is None else TRUE), (TRUE if init else FALSE)
+
+    def _uncertain(self, atom: AtomKey) -> int:
+        """The variable of an uncertain fact's start value: known, but not to the decomposer."""
+        if atom not in self.uncertain:
+            self.uncertain[atom] = self.m.new_bool((UNCERTAIN, atom, -1, None))
+        return self.uncertain[atom]
 
     def _chain_root(self, atom: AtomKey, chains: dict[AtomKey, "Chain[V]"], start: Callable[[AtomKey], V],
                     numeric: bool) -> "Chain[V]":
@@ -266,6 +283,9 @@ class Encoder(EncodingState):
     def _bool_holds(self, atom: AtomKey, positive: bool, writers: Sequence[tuple[int, bool]], name: Name) -> Lit:
         """Literal: the open-world test ``atom == positive`` holds after ``writers``."""
         if not writers:
+            if atom in self.uncertain_atoms:
+                start = self._uncertain(atom)
+                return start if positive else neg(start)
             init = self.facts.get(atom)
             return TRUE if init is None or init == positive else FALSE
         known, true = self._bool_value(atom, writers)

@@ -1,0 +1,71 @@
+"""Uncertain worlds measured: one whole process per command, start-up included.
+
+The delivery family (the reference's food-logistics delivery, n deliveries in one world:
+``benchmarks/generate.py``) with one uncertain fact per delivery, whether the patient can fetch
+the meal (``Patient<i>.can_fetch``, true with probability 0.9), at n = 100, 1000 and 5000:
+``count --robust``, ``count --possible``, ``decompose --most-likely`` (its output written) and
+``explain``; and the bundled example examples/medication-round.
+
+Each run is ``python -m mutrose_cp ... -q``, measured by the parent as the other benchmarks are
+(wall time and peak memory, ``benchmarks/run.py:measure``), with the package's bytecode
+compiled first.  Results go to ``benchmarks/results/uncertain.json``; the table is printed as
+Markdown for docs/benchmarks.md.
+
+    python benchmarks/uncertain.py           # every size (about a minute)
+    python benchmarks/uncertain.py --quick   # n = 100 and the example
+"""
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from generate import generate  # noqa: E402
+from run import measure, quick_run  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE = ROOT / "examples" / "medication-round"
+COMMANDS = {"count --robust": ["count", "--robust"], "count --possible": ["count", "--possible"],
+            "decompose --most-likely": ["decompose", "--most-likely"], "explain": ["explain"]}
+
+
+def uncertainty(n: int, path: Path) -> Path:
+    """One uncertain fact per delivery: its patient can fetch the meal, with probability 0.9."""
+    path.write_text(json.dumps({"uncertain": [{"entity": f"Patient{i}", "attribute": "can_fetch", "probability": 0.9}
+                                              for i in range(1, n + 1)]}))
+    return path
+
+
+def run(inputs: list[str], name: str, work: Path) -> dict:
+    argv = COMMANDS[name]
+    out = ["-o", str(work / "plan.json")] if argv[0] == "decompose" else []
+    result = measure([sys.executable, "-m", "mutrose_cp", argv[0], *inputs, *argv[1:], *out, "-q"], ROOT, 600)
+    return {"command": name, "seconds": result["seconds"], "peak_mb": result["peak_mb"], "status": result["status"]}
+
+
+def main(argv: list[str] | None = None) -> int:
+    quick = quick_run(__doc__, argv)
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        work = Path(folder)
+        for n in ([100] if quick else [100, 1000, 5000]):
+            hddl, gm, cfg = generate("delivery", n, work / f"delivery-{n}")
+            facts = uncertainty(n, work / f"delivery-{n}" / "uncertain.json")
+            for name in COMMANDS:
+                inputs = [str(hddl), str(gm), str(cfg), "--uncertain", str(facts)]
+                rows.append({"mission": f"delivery n={n}", "uncertain_facts": n, **run(inputs, name, work)})
+        for name in COMMANDS:
+            rows.append({"mission": "examples/medication-round", "uncertain_facts": 2, **run([str(EXAMPLE)], name, work)})
+    out = ROOT / "benchmarks" / "results" / ("uncertain-quick.json" if quick else "uncertain.json")
+    out.write_text(json.dumps(rows, indent=1) + "\n")
+    print("| mission | uncertain facts | command | status | time | peak memory |\n|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['mission']} | {r['uncertain_facts']} | `{r['command']}` | {r['status']} | {r['seconds']:.2f} s "
+              f"| {r['peak_mb']:.0f} MB |")
+    return 0 if all(r["status"] == "ok" for r in rows) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,151 @@
+"""Reading an uncertainty file (docs/formats/uncertainty.md): which world attributes are not
+known for sure, with their values' probabilities when known.
+
+    {"uncertain": [
+        {"entity": "Room104", "attribute": "door_open"},
+        {"entity": "Room102", "attribute": "door_open", "probability": 0.3},
+        {"entity": "Kitchen", "attribute": "stock", "distribution": {"0": 0.25, "2": 0.75}},
+        {"entity": "Kitchen", "attribute": "trays", "values": [0, 1, 2]}
+    ]}
+
+Every problem is reported at once, at ``file:line:col`` of the value at fault (exit 2).  What
+the entries mean for the mission (the attribute's mapping, the entity's record) is checked by
+:mod:`mutrose_cp.pipeline.uncertain_facts`.
+"""
+from __future__ import annotations
+
+import math
+import os
+from typing import Any
+
+from ..errors import MissionError, Problem
+from ..model.uncertainty import UncertainEntry, Value
+from .located_json import LocatedJson, Path, path_text, read_located_json
+
+KEYS = ("entity", "attribute", "probability", "values", "distribution")
+#: at most this many values of one numeric fact
+MAX_VALUES = 64
+#: probabilities of one fact must add up to 1 within this
+TOLERANCE = 1e-9
+
+
+def read_uncertainty(path: str | os.PathLike[str]) -> tuple[list[UncertainEntry], list[Problem]]:
+    """The well-formed entries of the uncertainty file at ``path``, in file order, and the
+    problems of the others (so that the caller reports them with those it finds in the
+    entries).  A file that cannot be read, or is not JSON, raises."""
+    return _Reader(read_located_json(path, "uncertainty")).entries()
+
+
+class _Reader:
+    def __init__(self, doc: LocatedJson) -> None:
+        self.doc = doc
+        self.problems: list[Problem] = []
+
+    def problem(self, path: Path, message: str) -> None:
+        self.problems.append(Problem(self.doc.at(path), f"{path_text(path)}: {message}" if path else message))
+
+    def entries(self) -> tuple[list[UncertainEntry], list[Problem]]:
+        data = self.doc.data
+        if not isinstance(data, dict) or "uncertain" not in data:
+            raise MissionError(Problem(self.doc.at(()), 'an uncertainty file is an object with a list "uncertain" '
+                                                        '(docs/formats/uncertainty.md)'))
+        for key in data:
+            if key != "uncertain":
+                self.problem((key,), 'unknown key: an uncertainty file holds "uncertain" only')
+        listed = data["uncertain"]
+        if not isinstance(listed, list):
+            raise MissionError(Problem(self.doc.at(("uncertain",)), "uncertain: expected a list of entries"))
+        found = [entry for i, item in enumerate(listed) if (entry := self.entry(item, ("uncertain", i))) is not None]
+        seen: dict[tuple[str, str], str] = {}
+        for entry in found:
+            earlier = seen.setdefault((entry.entity, entry.attribute), entry.where)
+            if earlier != entry.where:
+                self.problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute} is already uncertain "
+                                                          f"at {earlier}"))
+        return found, self.problems
+
+    def entry(self, item: Any, path: Path) -> UncertainEntry | None:
+        """One entry, or None when it has a problem (reported)."""
+        if not isinstance(item, dict):
+            self.problem(path, 'expected an object {"entity": ..., "attribute": ...}')
+            return None
+        before = len(self.problems)
+        for key in item:
+            if key not in KEYS:
+                self.problem((*path, key), f"unknown key (one of {', '.join(KEYS)})")
+        entity, attribute = (self.name(item, path, key) for key in ("entity", "attribute"))
+        given = [key for key in ("probability", "values", "distribution") if key in item]
+        values: tuple[Value, ...] | None = None  # None: a boolean, either way
+        probabilities: tuple[float, ...] | None = None
+        if len(given) > 1:
+            self.problem((*path, given[1]), f"give one of probability, values and distribution, not {' and '.join(given)}")
+        elif given == ["probability"]:
+            p = self.probability(item["probability"], (*path, "probability"))
+            values, probabilities = (False, True), (None if p is None else (1 - p, p))
+        elif given == ["values"]:
+            values = self.values(item["values"], (*path, "values"))
+        elif given == ["distribution"]:
+            values, probabilities = self.distribution(item["distribution"], (*path, "distribution"))
+        if len(self.problems) > before or entity is None or attribute is None:
+            return None
+        return UncertainEntry(entity, attribute, values, probabilities, self.doc.at(path),
+                              numeric=given in (["values"], ["distribution"]))
+
+    def name(self, item: dict[str, Any], path: Path, key: str) -> str | None:
+        value = item.get(key)
+        if not isinstance(value, str) or not value.strip():
+            self.problem((*path, key) if key in item else path, f"{key}: expected a non-empty string")
+            return None
+        return value.strip()
+
+    def probability(self, value: Any, path: Path) -> float | None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= 1 or math.isnan(value):
+            self.problem(path, f"expected a probability between 0 and 1, not {value!r}")
+            return None
+        return float(value)
+
+    def number(self, value: Any, path: Path) -> float | None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            self.problem(path, f"expected a number, not {value!r}")
+            return None
+        return float(value)
+
+    def values(self, listed: Any, path: Path) -> tuple[Value, ...] | None:
+        if not isinstance(listed, list) or not 2 <= len(listed) <= MAX_VALUES:
+            self.problem(path, f"expected a list of 2 to {MAX_VALUES} numbers")
+            return None
+        numbers = [self.number(v, (*path, i)) for i, v in enumerate(listed)]
+        if any(n is None for n in numbers):
+            return None
+        if len(set(numbers)) != len(numbers):
+            self.problem(path, "a value is listed twice")
+            return None
+        return tuple(n for n in numbers if n is not None)
+
+    def distribution(self, table: Any, path: Path) -> tuple[tuple[Value, ...] | None, tuple[float, ...] | None]:
+        if not isinstance(table, dict) or not 2 <= len(table) <= MAX_VALUES:
+            self.problem(path, f'expected an object of 2 to {MAX_VALUES} values and their probabilities, {{"0": 0.25, "2": 0.75}}')
+            return None, None
+        values: list[float] = []
+        probabilities: list[float] = []
+        for key, p in table.items():
+            try:
+                value = float(key)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                self.problem((*path, key), f"{key!r} is not a number")
+                continue
+            if value in values:
+                self.problem((*path, key), f"the value {key} is given twice")
+                continue
+            checked = self.probability(p, (*path, key))
+            if checked is not None:
+                values.append(value)
+                probabilities.append(checked)
+        if len(values) != len(table):
+            return None, None
+        if abs(math.fsum(probabilities) - 1) > TOLERANCE:
+            self.problem(path, f"the probabilities add up to {math.fsum(probabilities):g}, not 1")
+            return None, None
+        return tuple(values), tuple(probabilities)

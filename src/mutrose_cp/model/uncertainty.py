@@ -1,0 +1,75 @@
+"""What the world knowledge does not know for sure, as values (docs/formats/uncertainty.md).
+
+An uncertain fact is one world attribute of one entity (``Room104``'s ``door_open``), read by
+the configuration's semantic mapping as one ground atom (``door-open(Room104)``), whose value
+is not the one the world file gives (or omits) but one of several: a boolean either way, with
+P(true) when it is known, or a number among a few values, each with its probability when known.
+Facts are independent: the probability of a scenario (one value for every fact) is the product
+of its values' probabilities.
+
+Produced by :mod:`mutrose_cp.io.uncertainty` (the file as written) and
+:mod:`mutrose_cp.pipeline.uncertain_facts` (resolved against the mission).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+AtomKey = tuple[str, tuple[str, ...]]
+Value = bool | float
+
+
+@dataclass(frozen=True)
+class UncertainEntry:
+    """One entry of an uncertainty file, as written: the entity and attribute, and the values
+    with their probabilities (None: each value possible, none more likely)."""
+
+    entity: str
+    attribute: str
+    values: tuple[Value, ...] | None  # None: a boolean, either way
+    probabilities: tuple[float, ...] | None
+    where: str  # file:line:col of the entry
+    numeric: bool = False  # given as numbers (values, distribution), not a probability of true
+
+
+@dataclass(frozen=True)
+class UncertainFact:
+    """An entry resolved against the mission: the atom it is, and the values it may take."""
+
+    entry: UncertainEntry
+    atom: AtomKey
+    numeric: bool
+    values: tuple[Value, ...]
+    probabilities: tuple[float, ...] | None  # aligned with ``values``; None when not given
+
+    @property
+    def text(self) -> str:
+        """``door-open(Room104)``."""
+        return f"{self.atom[0]}({', '.join(self.atom[1])})"
+
+    def shown(self, value: Value) -> str:
+        """The fact with one of its values: ``door-open(Room104)``, ``not door-open(Room104)``,
+        ``stock(Kitchen) = 2``."""
+        if not self.numeric:
+            return self.text if value else f"not {self.text}"
+        return f"{self.text} = {value:g}" if isinstance(value, float) else f"{self.text} = {value}"
+
+    def probability(self, value: Value) -> float | None:
+        if self.probabilities is None:
+            return None
+        return self.probabilities[self.values.index(value)]
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """The uncertain facts of a mission, in file order."""
+
+    source: str
+    facts: tuple[UncertainFact, ...]
+
+    @property
+    def with_probabilities(self) -> bool:
+        """Whether every fact has probabilities (then every answer has one)."""
+        return all(f.probabilities is not None for f in self.facts)
+
+    def fact(self, atom: AtomKey) -> UncertainFact | None:
+        return next((f for f in self.facts if f.atom == atom), None)

@@ -1,0 +1,126 @@
+"""The entries of an uncertainty file resolved against the mission: each entity's attribute
+becomes the ground atom the configuration's semantic mapping reads it as (spec
+``config-and-knowledge.md`` section 6), checked so that a typo never makes a fact silently
+certain.
+
+What the goal model reads (queries, contexts, achieve and forAll conditions) decides which task
+instances exist, before any decomposition: an uncertain attribute read there is refused, naming
+the goal and the condition, rather than answered as if the instances were fixed.
+"""
+from __future__ import annotations
+
+from typing import Iterable, Iterator
+
+from ..errors import MissionError, Problem, closest
+from ..model import Configuration, GoalModel, SemanticMapping
+from ..model.expressions import Atom, BoolOp, Condition
+from ..model.uncertainty import UncertainEntry, UncertainFact, Uncertainty
+
+
+def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: Configuration,
+                        sorts: dict[str, frozenset[str]], goal_model: GoalModel) -> Uncertainty:
+    """The uncertain facts of the mission; every problem at once (exit 2)."""
+    problems: list[Problem] = []
+    facts: list[UncertainFact] = []
+    seen: set[tuple[str, tuple[str, ...]]] = set()
+    read = dict(goal_model_reads(goal_model))
+    mappings = _AttributeMappings(config, sorts)
+    for entry in entries:
+        try:
+            fact = mappings.resolve(entry)
+        except MissionError as err:
+            problems.extend(err.problems)
+            continue
+        if entry.attribute in read:
+            goal, text = read[entry.attribute]
+            problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute}: goal {goal} reads "
+                                                 f"{entry.attribute} ({text}), so its value decides which task "
+                                                 "instances exist; uncertainty in what the goal model reads is not "
+                                                 "supported: give the attribute's value in the world file"))
+            continue
+        if fact.atom in seen:
+            problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute} is the fact {fact.text}, "
+                                                 "already uncertain by an earlier entry"))
+            continue
+        seen.add(fact.atom)
+        facts.append(fact)
+    if problems:
+        raise MissionError(problems)
+    return Uncertainty(source, tuple(facts))
+
+
+class _AttributeMappings:
+    """The configuration's attribute mappings by attribute name, read once for every entry."""
+
+    def __init__(self, config: Configuration, sorts: dict[str, frozenset[str]]) -> None:
+        self.config = config
+        self.sorts = sorts
+        self.by_name: dict[str, list[SemanticMapping]] = {}
+        for m in config.semantic_mapping:
+            if m.type == "attribute" and m.mapped_type in ("predicate", "function") and m.relates_to.lower() != "robot":
+                self.by_name.setdefault(m.name, []).append(m)
+
+    def resolve(self, entry: UncertainEntry) -> UncertainFact:
+        config, sorts = self.config, self.sorts
+        mappings = self.by_name.get(entry.attribute, [])
+        if not mappings:
+            mapped = sorted({m.name for m in config.semantic_mapping if m.type == "attribute" and m.name})
+            guess = closest(entry.attribute, mapped)
+            raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: the configuration maps no "
+                                                    f"attribute {entry.attribute} to a predicate or function"
+                                                    + (f" (did you mean {guess}?)" if guess else "")))
+        for m in mappings:
+            hddl = config.type_mapping.get(m.relates_to)
+            if hddl is not None and entry.entity in sorts.get(hddl, frozenset()):
+                atom = (m.pred, (entry.entity,) * sum(1 for s in m.arg_sorts if s == hddl))
+                return _fact(entry, atom, m.mapped_type == "function", m.pred)
+        types = " or ".join(sorted({m.relates_to for m in mappings}))
+        known = sorted({e for m in mappings for e in sorts.get(config.type_mapping.get(m.relates_to, ""), frozenset())})
+        guess = closest(entry.entity, known)
+        raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: the world has no {types} "
+                                                f"{entry.entity}" + (f" (did you mean {guess}?)" if guess else "")))
+
+
+def _fact(entry: UncertainEntry, atom: tuple[str, tuple[str, ...]], numeric: bool, name: str) -> UncertainFact:
+    boolean = not entry.numeric
+    if numeric and boolean:
+        raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute} is the function {name}: give its "
+                                                'possible "values" or a "distribution", not a probability of true'))
+    if not numeric and not boolean:
+        raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute} is the predicate {name}: give "
+                                                '"probability" (of true), or nothing, not numeric values'))
+    values = (False, True) if boolean else entry.values
+    assert values is not None
+    return UncertainFact(entry, atom, numeric, values, entry.probabilities)
+
+
+def goal_model_reads(gm: GoalModel) -> Iterator[tuple[str, tuple[str, str]]]:
+    """(attribute, (goal id, condition text)) for each attribute a goal-model condition reads."""
+    for node in gm.nodes:
+        conditions: list[tuple[Condition | None, str]] = []
+        if node.query is not None:
+            conditions.append((node.query.condition, node.query.text))
+        if node.forall is not None:
+            conditions.append((node.forall.condition, node.forall.text))
+        if node.achieve_condition is not None:
+            conditions.append((node.achieve_condition, node.achieve_text))
+        if node.context is not None and node.context.condition is not None:
+            conditions.append((node.context.condition, node.context.text))
+        for condition, text in conditions:
+            for atom in _atoms(condition):
+                for attribute in (atom.attribute, *_dotted(atom.value)):
+                    if attribute:
+                        yield attribute, (node.id, text)
+
+
+def _atoms(condition: Condition | None) -> Iterator[Atom]:
+    if isinstance(condition, Atom):
+        yield condition
+    elif isinstance(condition, BoolOp):
+        for child in condition.children:
+            yield from _atoms(child)
+
+
+def _dotted(value: str) -> list[str]:
+    """The attribute of a right-hand side ``r.patients`` (none for a constant)."""
+    return [value.split(".", 1)[1]] if "." in value and not value.replace(".", "", 1).isdigit() else []

@@ -1,0 +1,251 @@
+"""Decompositions in a world that is not fully known (solve/uncertain.py), against brute force:
+the world file rewritten once per scenario (every uncertain fact given a value), each world
+decomposed as today, and robust / possible / probability read off the listed decompositions."""
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import os
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+from lxml import etree
+
+from mutrose_cp.errors import MissionError
+from mutrose_cp.mission import Mission
+from mutrose_cp.pipeline.uncertain_facts import goal_model_reads
+from mutrose_cp.solve.uncertain import sensing, uncertain_space
+from conftest import ROOT, require_reference
+from missiongen import MissionSpec, missions
+
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from generate import generate  # noqa: E402
+
+EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "hospital-disinfection"
+EXAMPLES = int(os.environ.get("MUTROSE_UNCERTAIN_EXAMPLES", "40"))
+
+Entry = tuple[str, str, float | None]  # entity, attribute, P(true) or None
+
+
+def mission_files(folder: Path) -> tuple[Path, Path, Path]:
+    return tuple(next((folder / d).iterdir()) for d in ("hddl", "gm", "configuration"))  # type: ignore[return-value]
+
+
+def write_uncertainty(path: Path, entries: list[Entry]) -> Path:
+    listed = [{"entity": e, "attribute": a, **({} if p is None else {"probability": p})} for e, a, p in entries]
+    path.write_text(json.dumps({"uncertain": listed}))
+    return path
+
+
+def rewrite_world(world: Path, values: dict[tuple[str, str], bool], out: Path) -> None:
+    """``world`` with each (entity, attribute) set to its value, written to ``out``."""
+    tree = etree.parse(str(world))
+    for (entity, attribute), value in values.items():
+        records = [el for el in tree.getroot().iter() if el.findtext("name") == entity]
+        assert records, entity
+        field = records[0].find(attribute)
+        if field is None:
+            field = etree.SubElement(records[0], attribute)
+        field.text = "True" if value else "False"
+    tree.write(str(out))
+
+
+def ids(mission: Mission, decomposition) -> frozenset[str]:
+    return frozenset(mission.task_graph.decomposition(v).decomposition.id for v in decomposition)
+
+
+class BruteForce:
+    """Each scenario's world decomposed as today: the valid decompositions by id, and each
+    scenario's probability."""
+
+    def __init__(self, hddl: Path, gm: Path, config: Path, world: Path, entries: list[Entry]) -> None:
+        self.valid: list[tuple[float | None, set[frozenset[str]]]] = []
+        self.scenarios = list(itertools.product((False, True), repeat=len(entries)))
+        original = world.read_bytes()
+        try:
+            for values in self.scenarios:
+                world.write_bytes(original)
+                rewrite_world(world, {(e, a): v for (e, a, _), v in zip(entries, values)}, world)
+                mission = Mission.load(hddl, gm, config)
+                listed = {ids(mission, d) for d in mission.decomposition_space()} if mission.task_graph.tasks() else set()
+                p: float | None = 1.0
+                for (_, _, probability), value in zip(entries, values):
+                    p = None if p is None or probability is None else p * (probability if value else 1 - probability)
+                self.valid.append((p, listed))
+        finally:
+            world.write_bytes(original)
+
+    @property
+    def possible(self) -> set[frozenset[str]]:
+        return set().union(*(v for _, v in self.valid))
+
+    @property
+    def robust(self) -> set[frozenset[str]]:
+        return set.intersection(*(v for _, v in self.valid)) if self.valid else set()
+
+    def settling_sets(self) -> list[frozenset[int]]:
+        """Every set of facts (by index) whose values, once known, leave some decomposition
+        valid in every scenario with those values."""
+        k = len(self.scenarios[0]) if self.scenarios else 0
+        found = []
+        for size in range(k + 1):
+            for subset in itertools.combinations(range(k), size):
+                def settled(values: tuple[bool, ...]) -> bool:
+                    valid = [v for (_, v), s in zip(self.valid, self.scenarios)
+                             if all(s[i] == x for i, x in zip(subset, values))]
+                    return bool(set.intersection(*valid)) if valid else True
+                if all(settled(values) for values in itertools.product((False, True), repeat=size)):
+                    found.append(frozenset(subset))
+        return found
+
+    def expected_best(self, fact: int) -> float:
+        """The best probability of a decomposition expected once fact ``fact`` is known."""
+        total = 0.0
+        for value in (False, True):
+            candidates = self.possible or {frozenset()}
+            total += max(math.fsum(p for (p, v), s in zip(self.valid, self.scenarios) if s[fact] == value and d in v)
+                         for d in candidates)
+        return total
+
+    def probability(self, decomposition: frozenset[str]) -> float | None:
+        if any(p is None for p, _ in self.valid):
+            return None
+        return math.fsum(p for p, v in self.valid if decomposition in v)  # type: ignore[misc]
+
+
+def agree(mission: Mission, brute: BruteForce) -> None:
+    """Every answer of the uncertain space against the brute force."""
+    space = uncertain_space(mission)
+    assert space.count(robust=False) == len(brute.possible)
+    assert space.count(robust=True) == len(brute.robust)
+    listed = {ids(mission, d): d for d in space.space(robust=False)}
+    assert set(listed) == brute.possible
+    assert {ids(mission, d) for d in space.space(robust=True)} == brute.robust
+    for key, decomposition in listed.items():
+        judged = space.judge(decomposition)
+        assert judged.possible and judged.robust == (key in brute.robust)
+        expected = brute.probability(key)
+        assert (judged.probability is None) == (expected is None)
+        if expected is not None:
+            assert judged.probability == pytest.approx(expected, abs=1e-12)
+        for fact, value in judged.needs:  # every scenario that allows it gives the fact that value
+            index = mission.uncertainty.facts.index(fact)
+            assert all(values[index] == value for (_, valid), values in zip(brute.valid, brute.scenarios) if key in valid)
+    plan = sensing(space)
+    settles = brute.settling_sets()
+    if plan.facts is None:
+        assert not settles
+    else:
+        chosen = frozenset(mission.uncertainty.facts.index(f) for f in plan.facts)
+        assert chosen in settles and len(chosen) == min(len(s) for s in settles)
+    if mission.uncertainty.with_probabilities:
+        assert plan.best == pytest.approx(max((brute.probability(k) or 0 for k in brute.possible), default=0), abs=1e-12)
+        expected = {mission.uncertainty.facts[i].text: brute.expected_best(i) for i in range(len(brute.scenarios[0]))}
+        for fact, gain in plan.gains:
+            assert gain == pytest.approx(expected[fact.text], abs=1e-12), fact.text
+    if mission.uncertainty.with_probabilities and brute.possible:
+        best, probability = space.most_likely({})
+        assert probability == pytest.approx(max(brute.probability(k) or 0 for k in brute.possible), abs=1e-12)
+        assert probability == pytest.approx(brute.probability(ids(mission, best)) or 0, abs=1e-12)
+
+
+def test_hospital_doors_against_brute_force(tmp_path):
+    """The bundled example with its two doors uncertain (one the world gives, one it omits)."""
+    folder = tmp_path / "mission"
+    shutil.copytree(EXAMPLE, folder)
+    hddl, gm, config = mission_files(folder)
+    world = next((folder / "knowledge").iterdir())
+    for entries in ([("Room104", "door_open", 0.5), ("Room102", "door_open", 0.2)],
+                    [("Room104", "door_open", None)],
+                    [("Room101", "occupied", 0.1), ("Room102", "door_open", 0.7), ("Room104", "door_open", 0.4)]):
+        brute = BruteForce(hddl, gm, config, world, entries)
+        mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries))
+        agree(mission, brute)
+
+
+@st.composite
+def uncertain_missions(draw):
+    """A generated mission and 1-8 of its room facts made uncertain (attributes the goal model
+    does not read), some with a probability."""
+    spec: MissionSpec = draw(missions())
+    return spec, draw(st.randoms(use_true_random=False))
+
+
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck))
+@given(uncertain_missions())
+def test_generated_missions_against_brute_force(tmp_path_factory, case):
+    spec, rnd = case
+    folder = tmp_path_factory.mktemp("mission")
+    hddl, gm, config = spec.write(folder)
+    world = folder / "knowledge" / "world_db.xml"
+    mission = Mission.load(hddl, gm, config)
+    assume(mission.task_graph.tasks() and mission.decomposition_space().count <= 500)
+    read = dict(goal_model_reads(mission.goal_model))
+    attributes = sorted(m.name for m in mission.config.semantic_mapping
+                        if m.type == "attribute" and m.mapped_type == "predicate" and m.name not in read
+                        and m.relates_to == "Room")
+    rooms = sorted(mission.initial_state.sorts.get("room", ()))
+    candidates = [(r, a) for r in rooms for a in attributes]
+    assume(candidates)
+    chosen = rnd.sample(candidates, min(len(candidates), rnd.randint(1, 8)))
+    with_probabilities = rnd.random() < 0.7
+    entries = [(r, a, rnd.choice([0.1, 0.25, 0.5, 0.9]) if with_probabilities else None) for r, a in chosen]
+    brute = BruteForce(hddl, gm, config, world, entries)
+    try:
+        mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(folder / "u.json", entries))
+        agree(mission, brute)
+    except MissionError as refused:  # only what the decomposer reads straight from the world
+        assert "unique-branch" in str(refused), str(refused)
+
+
+@pytest.mark.parametrize(("family", "n", "attribute", "entities"), [
+    ("delivery", 8, "can_fetch", ["Patient2", "Patient5", "Patient7"]),  # the other copies are replayed
+    ("coupled", 2, "can_fetch", ["Patient1", "Patient2"]),
+    ("vital-signs", 2, "available", ["Patient1", "Patient2", "Patient4"]),
+])
+def test_benchmark_families_against_brute_force(tmp_path, family, n, attribute, entities):
+    """The benchmark families, whose forAll copies the encoder otherwise replays from one
+    another: one uncertain fact per delivery (or patient), each with its probability."""
+    require_reference()
+    hddl, gm, config = generate(family, n, tmp_path)
+    world = next(tmp_path.glob("*.xml"))
+    entries = [(e, attribute, p) for e, p in zip(entities, (0.8, 0.3, 0.6))]
+    brute = BruteForce(hddl, gm, config, world, entries)
+    mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries))
+    assert brute.possible != brute.robust  # the facts matter
+    agree(mission, brute)
+
+
+def test_components_past_the_listing_limit_are_answered_with_bounds(tmp_path, monkeypatch, capsys):
+    """With fewer pairs listed than a component has, its counts are bounds that hold the exact
+    answers, said so; what needs every pair (listing, sensing) refuses, naming the part."""
+    from mutrose_cp.cli.program import main
+    from mutrose_cp.errors import MissionError as Refused
+    from mutrose_cp.solve import uncertain
+
+    folder = tmp_path / "mission"
+    shutil.copytree(EXAMPLE, folder)
+    hddl, gm, config = mission_files(folder)
+    world = next((folder / "knowledge").iterdir())
+    entries = [("Room101", "occupied", 0.1), ("Room102", "door_open", 0.7), ("Room104", "door_open", 0.4)]
+    brute = BruteForce(hddl, gm, config, world, entries)
+    path = write_uncertainty(tmp_path / "u.json", entries)
+    monkeypatch.setattr(uncertain, "MAX_PAIRS", 3)
+    space = uncertain_space(Mission.load(hddl, gm, config, uncertainty=path))
+    assert any(c.bounds is not None for c in space.components)
+    for robust, exact in ((False, len(brute.possible)), (True, len(brute.robust))):
+        low, high = space.bounds(robust)
+        assert low <= exact <= high
+    assert space.bounds(False)[0] < space.bounds(False)[1]  # bounds, not an exact count
+    for ask in (lambda: space.count(robust=False), lambda: space.space(robust=True), lambda: sensing(space)):
+        with pytest.raises(Refused, match="pairs of a decomposition and a scenario of its"):
+            ask()
+    assert main(["count", str(folder), "--uncertain", str(path)]) == 0
+    out, err = capsys.readouterr()
+    low, high = space.bounds(False)
+    assert out.splitlines()[-1] == f"{low}..{high}" and "bounds, not exact counts: part" in err

@@ -1,0 +1,179 @@
+"""Uncertain worlds on the command line (count, decompose, explain, check), attacked: bad
+values, located errors, FIFOs, outputs onto the uncertainty file, options without a file,
+determinism, and byte-identical outputs without one."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+from mutrose_cp.cli.program import main
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE = ROOT / "examples" / "medication-round"
+HOSPITAL = ROOT / "examples" / "hospital-disinfection"
+
+
+@pytest.fixture
+def mission(tmp_path: Path) -> Path:
+    folder = tmp_path / "medication-round"
+    shutil.copytree(EXAMPLE, folder)
+    return folder
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_the_example_counts_explains_and_decomposes(mission, capsys, tmp_path):
+    """The story of examples/medication-round: Room202's lock and Room203's patient."""
+    assert run(capsys, "count", str(mission), "-q")[:2] == (0, "4\n")
+    assert run(capsys, "count", str(mission), "-q", "--possible")[:2] == (0, "4\n")
+    assert run(capsys, "count", str(mission), "-q", "--robust")[:2] == (0, "0\n")  # an answer, not a failure
+    status, out, _ = run(capsys, "explain", str(mission), "-q")
+    assert status == 0
+    assert "sense first: door-locked(Room202), patient-present(Room203)" in out
+    assert "most likely decomposition now: valid with probability 0.48" in out
+    assert out.index("patient-present(Room203) first raises it to 0.8") < out.index("door-locked(Room202) first raises it to 0.6")
+    plan = tmp_path / "plan.json"
+    assert run(capsys, "decompose", str(mission), "--most-likely", "-o", str(plan), "-q")[0] == 0
+    written = json.loads(plan.read_text())
+    section = written["mission_decomposition_uncertainty"]
+    assert (section["possible"], section["robust"]) == ("4", "0")
+    assert section["decompositions"] == [{"robust": "False", "probability": "0.48",
+                                          "needs": ["not door-locked(Room202)", "patient-present(Room203)"]}]
+    ids = sorted(written["tasks"][k]["id"] for k in written["mission_decompositions"][0])
+    assert ids == ["AT1_1|1", "AT1_2|1", "AT1_3|1", "AT2_1|1", "AT2_2|1", "AT2_3|1"]
+    assert run(capsys, "decompose", str(mission), "--robust", "-o", str(tmp_path / "r.json"), "-q")[0] == 3
+    assert not (tmp_path / "r.json").exists()
+
+
+def test_listed_decompositions_carry_their_assumptions_in_both_json_styles(mission, capsys, tmp_path):
+    boost, standard = tmp_path / "boost.json", tmp_path / "standard.json"
+    assert run(capsys, "decompose", str(mission), "-o", str(boost), "-q")[0] == 0
+    assert run(capsys, "decompose", str(mission), "-o", str(standard), "-q", "--json-style", "standard")[0] == 0
+    listed = json.loads(boost.read_text())
+    section = listed["mission_decomposition_uncertainty"]
+    assert len(section["decompositions"]) == len(listed["mission_decompositions"]) == 4
+    assert sum(float(d["probability"]) for d in section["decompositions"]) == pytest.approx(1.0)
+    typed = json.loads(standard.read_text())["mission_decomposition_uncertainty"]
+    assert typed["possible"] == 4 and typed["decompositions"][0]["robust"] is False
+    assert typed["decompositions"][0]["probability"] == pytest.approx(0.48)
+    first = boost.read_bytes()
+    assert run(capsys, "decompose", str(mission), "-o", str(boost), "-q")[0] == 0
+    assert boost.read_bytes() == first  # deterministic
+
+
+def test_without_uncertainty_the_output_is_what_it_was(mission, capsys, tmp_path):
+    """The configuration's key removed, or another command: the world as written, byte for
+    byte the output of a mission that never had an uncertainty file."""
+    config = mission / "configuration" / "configuration.json"
+    plain_config = json.loads(config.read_text())
+    del plain_config["uncertainty"]
+    plain = tmp_path / "plain"
+    shutil.copytree(mission, plain)
+    (plain / "configuration" / "configuration.json").write_text(json.dumps(plain_config, indent=4))
+    (plain / "knowledge" / "uncertain.json").unlink()
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    assert run(capsys, "decompose", str(plain), "-o", str(a), "-q")[0] == 0
+    assert "mission_decomposition_uncertainty" not in a.read_text()
+    assert run(capsys, "count", str(mission), "-q", "--as-written")[:2] == (0, "1\n")  # the file ignored
+    status, out, _ = run(capsys, "compare", str(mission), "-q")  # both decomposers, the world as written
+    assert status == 0 and "agree: cpsat, exploratory (1 valid mission decompositions)" in out
+    # verify reads the world as written, and says so
+    status, out, err = run(capsys, "verify", str(mission), "--property", "count uses(method hand-to-patient)")
+    assert status == 0 and "1 of 1 valid decompositions" in out
+    assert "does not read the uncertainty file" in err
+    assert run(capsys, "graph", str(mission), "-o", str(tmp_path / "g.dot"), "-q")[0] == 0
+    # the hospital example has no uncertainty file: its output is unchanged by this feature
+    assert run(capsys, "decompose", str(HOSPITAL), "-o", str(b), "-q")[0] == 0
+    assert "mission_decomposition_uncertainty" not in b.read_text()
+
+
+def test_options_that_need_an_uncertainty_file(capsys):
+    for argv, message in ((["count", str(HOSPITAL), "--robust"], "--robust counts decompositions under uncertain facts"),
+                          (["decompose", str(HOSPITAL), "--most-likely"], "--most-likely chooses among"),
+                          (["explain", str(HOSPITAL)], "explain says which uncertain facts to sense")):
+        status, _, err = run(capsys, *argv)
+        assert status == 2 and message in err, err
+    status, _, err = run(capsys, "decompose", str(EXAMPLE), "--algorithm", "exploratory", "-q")
+    assert status == 2 and "uncertain facts are decided by the CP-SAT decomposer" in err
+    status, _, err = run(capsys, "decompose", str(EXAMPLE), "--most-likely", "--sample", "2", "-q")
+    assert status == 2 and "cannot be combined with --sample" in err
+
+
+def test_bad_uncertainty_files_are_located(mission, capsys, tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"uncertain": [
+        {"entity": "Room202", "attribute": "door_lockd", "probability": 0.2},
+        {"entity": "Room230", "attribute": "patient_present"},
+        {"entity": "Room201", "attribute": "door_locked", "probability": 1.5},
+        {"entity": "Room201", "attribute": "patient_present", "values": [1, 2]},
+        {"entity": "Room203", "attribute": "patient_present", "colour": "red"},
+        {"entity": "Room201", "attribute": "door_locked", "probability": 0.1},
+        {"entity": "Room201", "attribute": "door_locked", "probability": 0.3},
+        "Room205",
+    ]}, indent=1))
+    status, _, err = run(capsys, "check", str(mission), "--uncertain", str(bad))
+    assert status == 2
+    for expected in ("bad.json:3:", "(did you mean door_locked?)", "the world has no Room Room230",
+                     "uncertain[2].probability: expected a probability between 0 and 1, not 1.5",
+                     "is the predicate patient-present: give \"probability\"", "uncertain[4].colour: unknown key",
+                     "Room201.door_locked is already uncertain at", "uncertain[7]: expected an object"):
+        assert expected in err, (expected, err)
+    assert "Traceback" not in err
+    for text, message in (("[1, 2", "invalid JSON"), ("[]", 'an uncertainty file is an object with a list "uncertain"'),
+                          ('{"uncertain": {}}', "uncertain: expected a list of entries"),
+                          ('{"uncertain": [], "more": 1}', "more: unknown key")):
+        bad.write_text(text)
+        status, _, err = run(capsys, "count", str(mission), "--uncertain", str(bad), "-q")
+        assert status == 2 and message in err, (text, err)
+
+
+def test_what_the_goal_model_reads_is_refused(tmp_path, capsys):
+    u = tmp_path / "u.json"
+    u.write_text(json.dumps({"uncertain": [{"entity": "Room101", "attribute": "is_disinfected", "probability": 0.5}]}))
+    status, _, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(u), "-q")
+    assert status == 2 and "goal G3 reads is_disinfected" in err and f"{u}:1:" in err
+
+
+def test_fifos_missing_files_and_outputs_onto_the_uncertainty_file(mission, capsys, tmp_path):
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    status, _, err = run(capsys, "count", str(mission), "--uncertain", str(fifo), "-q")  # at once, never blocking
+    assert status == 2 and "not a regular file" in err
+    status, _, err = run(capsys, "count", str(mission), "--uncertain", str(tmp_path / "none.json"), "-q")
+    assert status == 2 and "cannot read uncertainty file" in err
+    uncertain = mission / "knowledge" / "uncertain.json"
+    before = uncertain.read_bytes()
+    status, _, err = run(capsys, "decompose", str(mission), "-o", str(uncertain), "-q")
+    assert status == 2 and uncertain.read_bytes() == before
+    status, _, err = run(capsys, "decompose", str(mission), "--uncertain", str(fifo), "-o", str(fifo), "-q")
+    assert status == 2
+
+
+def test_numeric_uncertain_facts_are_read_then_refused_by_name(tmp_path, capsys):
+    """A distribution over a function is checked (it must add up to 1) and then refused, named,
+    by the commands that would decide it: never answered as if it were known."""
+    folder = tmp_path / "m"
+    shutil.copytree(EXAMPLE, folder)
+    config = folder / "configuration" / "configuration.json"
+    data = json.loads(config.read_text())
+    data["semantic_mapping"].append({"type": "attribute", "name": "stock", "relates_to": "Room", "belongs_to": "world_db",
+                                     "mapped_type": "function", "map": {"pred": "doses", "arg_sorts": ["room"]}})
+    config.write_text(json.dumps(data))
+    hddl = folder / "hddl" / "medication-round.hddl"
+    hddl.write_text(hddl.read_text().replace("    (:capabilities", "    (:functions (doses ?rm - room))\n\n    (:capabilities"))
+    u = folder / "knowledge" / "uncertain.json"
+    u.write_text(json.dumps({"uncertain": [{"entity": "Room201", "attribute": "stock", "distribution": {"0": 0.5, "1": 0.4}}]}))
+    status, _, err = run(capsys, "check", str(folder), "-q")
+    assert status == 2 and "the probabilities add up to 0.9, not 1" in err
+    u.write_text(json.dumps({"uncertain": [{"entity": "Room201", "attribute": "stock", "distribution": {"0": 0.5, "1": 0.5}}]}))
+    assert run(capsys, "check", str(folder), "-q")[0] == 0
+    status, _, err = run(capsys, "count", str(folder), "-q")
+    assert status == 2 and "doses(Room201) is a number" in err
