@@ -37,6 +37,8 @@ def test_api_guide_examples_run(monkeypatch, capsys):
     assert printed[4] == "3"
     # Mission.verify: every decomposition drops an item; the witness is one of them
     assert printed[5].startswith("fails 8 8 ['AT1_1|1'")
+    # uncertain worlds: no robust plan of 4, the likeliest at 0.48, two facts to sense
+    assert printed[6] == "0 4 0.48 ['door-locked(Room202)', 'patient-present(Room203)']"
 
 
 def test_readme_example_runs(monkeypatch, capsys):

@@ -157,9 +157,9 @@ def test_fifos_missing_files_and_outputs_onto_the_uncertainty_file(mission, caps
     assert status == 2
 
 
-def test_numeric_uncertain_facts_are_read_then_refused_by_name(tmp_path, capsys):
-    """A distribution over a function is checked (it must add up to 1) and then refused, named,
-    by the commands that would decide it: never answered as if it were known."""
+def test_numeric_uncertain_facts_are_checked_and_decided(tmp_path, capsys):
+    """A distribution over a function must add up to 1; then it is decided like a boolean (a
+    number nothing reads changes no count) and written with its values and probabilities."""
     folder = tmp_path / "m"
     shutil.copytree(EXAMPLE, folder)
     config = folder / "configuration" / "configuration.json"
@@ -173,7 +173,12 @@ def test_numeric_uncertain_facts_are_read_then_refused_by_name(tmp_path, capsys)
     u.write_text(json.dumps({"uncertain": [{"entity": "Room201", "attribute": "stock", "distribution": {"0": 0.5, "1": 0.4}}]}))
     status, _, err = run(capsys, "check", str(folder), "-q")
     assert status == 2 and "the probabilities add up to 0.9, not 1" in err
-    u.write_text(json.dumps({"uncertain": [{"entity": "Room201", "attribute": "stock", "distribution": {"0": 0.5, "1": 0.5}}]}))
+    u.write_text(json.dumps({"uncertain": [{"entity": "Room201", "attribute": "stock", "distribution": {"0": 0.5, "2": 0.5}},
+                                           {"entity": "Room203", "attribute": "patient_present", "probability": 0.6}]}))
     assert run(capsys, "check", str(folder), "-q")[0] == 0
-    status, _, err = run(capsys, "count", str(folder), "-q")
-    assert status == 2 and "doses(Room201) is a number" in err
+    assert run(capsys, "count", str(folder), "-q")[:2] == (0, "2\n")
+    out = tmp_path / "out.json"
+    assert run(capsys, "decompose", str(folder), "-q", "-o", str(out))[0] == 0
+    facts = json.loads(out.read_text())["mission_decomposition_uncertainty"]["uncertain_facts"]
+    assert facts[0] == {"fact": "doses(Room201)", "entity": "Room201", "attribute": "stock", "values": ["0", "2"],
+                        "probabilities": ["0.5", "0.5"]}

@@ -10,7 +10,7 @@ values goal-model variables take while the mission is expanded.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Collection
 
@@ -139,6 +139,9 @@ class InitialState:
     literals: tuple[GroundLiteral, ...]
     functions: tuple[tuple[tuple[str, tuple[str, ...]], Number], ...]
     warnings: tuple[str, ...] = ()  # world values read differently from how they are written
+    # atoms whose values were dropped (:meth:`forgetting`), and those of them read since
+    forgotten: frozenset[tuple[str, tuple[str, ...]]] = frozenset()
+    _forgotten_reads: set[tuple[str, tuple[str, ...]]] = field(default_factory=set, compare=False, repr=False)
 
     @cached_property
     def _literal_index(self) -> dict[tuple[str, tuple[str, ...]], bool]:
@@ -158,7 +161,12 @@ class InitialState:
         """This state with ``atoms`` unknown: their literals and values dropped (the uncertain
         facts of docs/formats/uncertainty.md, whose values the decomposer then chooses)."""
         return InitialState(self.sorts, tuple(lit for lit in self.literals if (lit.predicate, lit.args) not in atoms),
-                            tuple(f for f in self.functions if f[0] not in atoms), self.warnings)
+                            tuple(f for f in self.functions if f[0] not in atoms), self.warnings,
+                            frozenset(atoms))
+
+    def forgotten_reads(self) -> set[tuple[str, tuple[str, ...]]]:
+        """The forgotten atoms whose function values were asked for (a recursion's count)."""
+        return set(self._forgotten_reads)
 
     def fact_map(self) -> dict[tuple[str, tuple[str, ...]], bool]:
         """Every known atom and its polarity (the first literal of an atom decides), a copy to
@@ -175,7 +183,10 @@ class InitialState:
 
     def function_value(self, fn: str, args: tuple[str, ...] | list[str]) -> Number | None:
         """Value of the first ``fn(args)`` entry; None when unknown."""
-        return self._function_index.get((fn, tuple(args)))
+        key = (fn, tuple(args))
+        if self.forgotten and key in self.forgotten:
+            self._forgotten_reads.add(key)
+        return self._function_index.get(key)
 
     def objects_of(self, sort: str) -> frozenset[str]:
         """Objects of ``sort`` (empty for an unknown sort)."""

@@ -43,7 +43,11 @@ class UncertaintyRecord:
         facts = []
         for fact in self.space.uncertainty.facts:
             entry: dict[str, Any] = {"fact": fact.text, "entity": fact.entry.entity, "attribute": fact.entry.attribute}
-            if fact.probabilities is not None:
+            if fact.numeric:  # its values, with their probabilities when given
+                entry["values"] = [scalar(v) for v in fact.values]
+                if fact.probabilities is not None:
+                    entry["probabilities"] = [scalar(p) for p in fact.probabilities]
+            elif fact.probabilities is not None:
                 entry["probability"] = scalar(fact.probabilities[-1])
             facts.append(entry)
         decompositions = []

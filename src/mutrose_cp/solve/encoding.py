@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from typing import Any, Callable, Collection, Iterable, Sequence
+from typing import Any, Callable, Collection, Iterable, Mapping, Sequence
 
 from ..model.state_tests import AllOf, FactTest, Test, ValueTest
 from ..pipeline.conditions import compare
@@ -64,6 +64,8 @@ class Encoding:
     labels: dict[str, str] = field(default_factory=dict)  # record label -> explanation
     # uncertain fact -> its variable, the fact's value at the start (docs/formats/uncertainty.md)
     uncertain: dict[AtomKey, int] = field(default_factory=dict)
+    # uncertain number -> one variable per value it may have at the start (exactly one is true)
+    uncertain_numbers: dict[AtomKey, tuple[int, ...]] = field(default_factory=dict)
 
 
 # How the encoder's variables are named: the parts of a name are kept, and the text is made
@@ -98,16 +100,20 @@ class Encoder(EncodingState):
 
     def __init__(self, tg: TaskGraph, constraints: Sequence[Constraint], domain: Domain, gm: GoalModel,
                  config: Configuration, initial: InitialState, explain: bool = False, replay: bool = True,
-                 uncertain: Collection[AtomKey] = ()) -> None:
+                 uncertain: Collection[AtomKey] = (), uncertain_numbers: Mapping[AtomKey, Sequence[float]] | None = None) -> None:
         super().__init__(tg, constraints, domain, gm, config, initial, explain,
                          model=BoolModel(namer=functools.partial(variable_name, tg)))
         # stamped copies replay a leader's records (.replay); explaining labels every record by
         # its own vertices, so it encodes each copy in full, and so does a mission with uncertain
         # facts (a copy's class does not say which of its atoms are uncertain)
-        self._replaying = replay and not explain and not uncertain
+        self.number_values: Mapping[AtomKey, Sequence[float]] = uncertain_numbers or {}
+        self._replaying = replay and not explain and not uncertain and not self.number_values
         # boolean facts whose start value is a free variable, made when first read
         self.uncertain_atoms = frozenset(uncertain)
         self.uncertain: dict[AtomKey, int] = {}
+        # numbers whose start value is one of a few, chosen by variables made when first read:
+        # the choices, and the integer variable equal to the chosen value
+        self.uncertain_numbers: dict[AtomKey, tuple[tuple[int, ...], int]] = {}
         self._replay: CopyReplay | None = None  # while encoding
         self.replayed: tuple[int, int] = (0, 0)  # copies that replayed their task rules, classes that led them
         # the comparisons required of values the world does not give, by atom (.numeric)
@@ -130,7 +136,8 @@ class Encoder(EncodingState):
                 self.replayed = self._replay.summary()
         finally:
             self._replay = None  # it refers back to the encoder: let both go with the encoder
-        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels, self.uncertain)
+        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels, self.uncertain,
+                        {atom: choices for atom, (choices, _) in self.uncertain_numbers.items()})
 
     def _each(self, phase: int, vertices: Sequence[int], encode: Callable[[int], None]) -> None:
         """``encode`` each vertex in order; a stamped copy's run of vertices goes to the replay."""
@@ -173,7 +180,8 @@ class Encoder(EncodingState):
                         f"pre:{d.content}", f"{d.content}: a precondition is false in the initial world state, "
                                             "or an achieve condition after it")))
         self.m.records.append(Exactly(tuple(all_x), TRUE, label="unique-branch"))
-        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels, self.uncertain)
+        return Encoding(self.m, self.x, self.active, self.or_lits, tasks, self.labels, self.uncertain,
+                        {atom: choices for atom, (choices, _) in self.uncertain_numbers.items()})
 
     def _label(self, key_and_text: Callable[[], tuple[str, str]]) -> str:
         """The label of a record, with its explanation kept, when explaining; else none.  The
@@ -271,6 +279,29 @@ class Encoder(EncodingState):
             self.uncertain[atom] = self.m.new_bool((UNCERTAIN, atom, -1, None))
         return self.uncertain[atom]
 
+    def _uncertain_number(self, atom: AtomKey) -> tuple[tuple[int, ...], int]:
+        """An uncertain number's choices (one per value it may start with, exactly one true) and
+        the integer variable equal to the chosen value: a chain of assignments, one per choice."""
+        if atom not in self.uncertain_numbers:
+            values = self.number_values[atom]
+            choices = tuple(self.m.new_bool((UNCERTAIN, atom, -1, v)) for v in values)
+            self.m.records.append(Exactly(choices, TRUE))
+            span = self._number_span(atom)
+            start: int | None = None
+            for choice, value in zip(choices, values):
+                chosen = self.m.new_int((UNCERTAIN, atom, -1, ("value", value)), -span, span)
+                self.m.records.append(ValueAfter(choice, chosen, start, 0, scaled(value), NumericEffectKind.ASSIGN))
+                start = chosen
+            assert start is not None
+            self.uncertain_numbers[atom] = (choices, start)
+        return self.uncertain_numbers[atom]
+
+    def _number_span(self, atom: AtomKey) -> int:
+        """A bound on the magnitude of a number's start value (scaled), uncertain or not."""
+        if atom in self.number_values:
+            return max(abs(scaled(v)) for v in self.number_values[atom]) + 1
+        return self._num_span(self.values.get(atom))
+
     def _chain_root(self, atom: AtomKey, chains: dict[AtomKey, "Chain[V]"], start: Callable[[AtomKey], V],
                     numeric: bool) -> "Chain[V]":
         if self._replay is not None:
@@ -300,14 +331,19 @@ class Encoder(EncodingState):
         true), it is kept as a condition on the start value, checked against the others
         (:meth:`_start_values`)."""
         init = self.values.get(atom)
+        uncertain = atom in self.number_values
         if not writers:
+            if uncertain:  # the choices of the values that compare so
+                choices, _ = self._uncertain_number(atom)
+                passing = [c for c, v in zip(choices, self.number_values[atom]) if compare(v, op, bound)]
+                return self.m.or_of(passing, name) if passing else FALSE
             if init is None:
                 self._require_start(atom, op, bound, required, TRUE, None)
                 return TRUE
             return TRUE if compare(init, op, bound) else FALSE
         known, value = self._num_value(atom, writers)
         assert isinstance(value, int)
-        if init is None:
+        if init is None:  # (an uncertain number is known: no condition on its start is kept)
             self._require_start(atom, op, bound, required, neg(known), value)
         if known is FALSE:
             return TRUE
@@ -365,18 +401,21 @@ class Encoder(EncodingState):
         looked up by length for a prefix of all of them (as :meth:`_bool_value`); the variable is
         None before the first writer."""
         init = self.values.get(atom)
-        root = self._chain_root(atom, self.num_chains, lambda _: (TRUE if init is not None else FALSE, None), True)
+        if atom in self.number_values:
+            root = self._chain_root(atom, self.num_chains, lambda _: (TRUE, self._uncertain_number(atom)[1]), True)
+        else:
+            root = self._chain_root(atom, self.num_chains, lambda _: (TRUE if init is not None else FALSE, None), True)
         everyone = self.num_writers.get(atom, [])
         k = len(writers)
         if k and k <= len(everyone) and writers[-1] is everyone[k - 1]:  # a subsequence: this is a prefix
-            prefix = self.num_prefixes.setdefault(atom, [(root, self._num_span(init))])
+            prefix = self.num_prefixes.setdefault(atom, [(root, self._number_span(atom))])
             while len(prefix) <= k:
                 node, span = prefix[-1]
                 w, kind, amount = everyone[len(prefix) - 1]
                 span += abs(scaled(amount))
                 prefix.append((self._num_step(atom, node, w, kind, amount, span, init), span))
             return prefix[k][0].value
-        node, span = root, self._num_span(init)
+        node, span = root, self._number_span(atom)
         for w, kind, amount in writers:
             span += abs(scaled(amount))
             node = self._num_step(atom, node, w, kind, amount, span, init)

@@ -32,7 +32,7 @@ from functools import cached_property
 from typing import Iterable, Iterator, Mapping, Sequence
 
 from ..errors import MissionError
-from ..model.uncertainty import AtomKey, UncertainFact, Uncertainty
+from ..model.uncertainty import AtomKey, UncertainFact, Uncertainty, Value
 from ..pipeline.stages import MissionStages
 from .boolean_model import TRUE, Clause
 from .cpsat import Component, DecompositionSpace, solve_components, split_components
@@ -43,7 +43,7 @@ MAX_FACTS = 12
 #: at most this many (part, scenario) pairs of one component
 MAX_PAIRS = 200_000
 
-Scenario = tuple[bool, ...]  # one value per fact of the component, in its order
+Scenario = tuple[Value, ...]  # one value per fact of the component, in its order
 Part = tuple[int, ...]  # the component's chosen decomposition vertices, sorted
 
 
@@ -71,7 +71,7 @@ class UncertainComponent:
 
     @property
     def scenarios(self) -> int:
-        return 1 << len(self.facts)
+        return math.prod(len(f.values) for f in self.facts)
 
     def robust(self, part: Part) -> bool:
         return len(self.allowed[part]) == self.scenarios
@@ -90,7 +90,7 @@ class UncertainComponent:
             p *= probability
         return p
 
-    def assumptions(self, part: Part) -> list[tuple[UncertainFact, bool]]:
+    def assumptions(self, part: Part) -> list[tuple[UncertainFact, Value]]:
         """The fact values every scenario that allows ``part`` gives (what it needs)."""
         allowed = self.allowed[part]
         return [(fact, value) for i, fact in enumerate(self.facts)
@@ -204,7 +204,7 @@ class Judgement:
     possible: bool
     robust: bool
     probability: float | None
-    needs: tuple[tuple[UncertainFact, bool], ...]
+    needs: tuple[tuple[UncertainFact, Value], ...]
 
 
 def uncertain_space(stages: MissionStages) -> UncertainSpace:
@@ -212,73 +212,105 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
     must be set)."""
     uncertainty = stages.uncertainty
     assert uncertainty is not None
-    numeric = [f for f in uncertainty.facts if f.numeric]
-    if numeric:
-        raise MissionError(f"{numeric[0].entry.where}: {numeric[0].text} is a number: numeric uncertain facts are "
-                           "read and checked, but decided for booleans only")
     tg = stages.task_graph
     if tg.unique_branch:
         raise MissionError("the mission is unique-branch (spec semantics.md section 7.7), whose validity the "
                            "decomposer reads straight from the world: uncertain facts are not supported there")
     by_atom = {f.atom: f for f in uncertainty.facts}
+    read_by_recursion = stages.initial_state.forgotten_reads() & {f.atom for f in uncertainty.facts if f.numeric}
+    if read_by_recursion:
+        fact = by_atom[min(read_by_recursion)]
+        raise MissionError(f"{fact.entry.where}: {fact.text} is read by a recursive method to know how often it "
+                           "repeats, so the task decompositions would differ from value to value: it cannot be uncertain")
     enc = Encoder(tg, stages.constraints, stages.domain, stages.goal_model, stages.config, stages.initial_state,
-                  uncertain=by_atom).encode()
-    fact_of = {v: by_atom[atom] for atom, v in enc.uncertain.items()}
+                  uncertain=[f.atom for f in uncertainty.facts if not f.numeric],
+                  uncertain_numbers={f.atom: [float(v) for v in f.values] for f in uncertainty.facts if f.numeric}).encode()
+    # each variable of a fact, with the value the fact has when it is true (a boolean's False
+    # when its one variable is false)
+    fact_of: dict[int, UncertainFact] = {v: by_atom[atom] for atom, v in enc.uncertain.items()}
+    fact_of.update((v, by_atom[atom]) for atom, choices in enc.uncertain_numbers.items() for v in choices)
+    decoders = {by_atom[atom]: _Decoder((v,), (True,)) for atom, v in enc.uncertain.items()}
+    decoders.update((by_atom[atom], _Decoder(choices, by_atom[atom].values))
+                    for atom, choices in enc.uncertain_numbers.items())
     order = {f.atom: i for i, f in enumerate(uncertainty.facts)}
     var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
-    kept: list[tuple[int, Component, list[int]]] = []
+    kept: list[tuple[int, Component, list[UncertainFact]]] = []
     for number, comp in enumerate(split_components(enc)):
-        read = sorted({v for r in comp.records for v in r.variables() if v in fact_of},
-                      key=lambda v: order[fact_of[v].atom])
-        kept.append((number, comp, read))
+        facts = sorted({fact_of[v] for r in comp.records for v in r.variables() if v in fact_of},
+                       key=lambda f: order[f.atom])
+        kept.append((number, comp, facts))
     # each component solved with its facts among its choices: its (part, scenario) pairs; the
     # components that are the same up to renaming (one per forAll instance) are solved once
-    pairs = [Component(comp.records, [*comp.choice_vars, *read], solutions=comp.solutions, count=comp.count)
-             for _, comp, read in kept]
+    pairs = [Component(comp.records, [*comp.choice_vars, *(v for f in facts for v in decoders[f].variables)],
+                       solutions=comp.solutions, count=comp.count)
+             for _, comp, facts in kept]
     solve_components(enc.model, [p for p in pairs if p.records], keep=True, list_limit=MAX_PAIRS)
     # a component of neither choices nor facts only constrains: kept when it rules out everything
-    components = [_decided(enc, number, comp, read, solved, fact_of, var_to_dec)
-                  for (number, comp, read), solved in zip(kept, pairs)
-                  if comp.choice_vars or read or solved.count == 0]
+    components = [_decided(enc, number, comp, facts, decoders, solved, var_to_dec)
+                  for (number, comp, facts), solved in zip(kept, pairs)
+                  if comp.choice_vars or facts or solved.count == 0]
     return UncertainSpace(enc, uncertainty, components, var_to_dec)
 
 
-def _decided(enc: Encoding, number: int, comp: Component, read: Sequence[int], solved: Component,
-             fact_of: Mapping[int, UncertainFact], var_to_dec: Mapping[int, int]) -> UncertainComponent:
-    facts = tuple(fact_of[v] for v in read)
+@dataclass(frozen=True)
+class _Decoder:
+    """A fact's variables in a solution, read as its value: the value of the true one (a
+    boolean's one variable: True when true, False when not)."""
+
+    variables: tuple[int, ...]
+    values: tuple[Value, ...]
+
+    def value(self, solution: frozenset[int]) -> Value:
+        for v, value in zip(self.variables, self.values):
+            if v in solution:
+                return value
+        return False
+
+    def fixed(self, value: Value) -> list[Clause]:
+        """Clauses that give the fact ``value``."""
+        if len(self.variables) == 1 and self.values == (True,):
+            return [Clause((self.variables[0] if value else -self.variables[0],))]
+        return [Clause((v,) if option == value else (-v,)) for v, option in zip(self.variables, self.values)]
+
+
+def _decided(enc: Encoding, number: int, comp: Component, facts: Sequence[UncertainFact],
+             decoders: Mapping[UncertainFact, _Decoder], solved: Component,
+             var_to_dec: Mapping[int, int]) -> UncertainComponent:
     listed = _pairs(solved)
     if listed is None:
-        return _bounded(enc, number, comp, read, solved, facts)
+        return _bounded(enc, number, comp, facts, decoders, solved)
     allowed: dict[Part, set[Scenario]] = {}
     for solution in listed:
         part = tuple(sorted(var_to_dec[v] for v in solution if v in var_to_dec))
-        allowed.setdefault(part, set()).add(tuple(v in solution for v in read))
+        allowed.setdefault(part, set()).add(tuple(decoders[f].value(solution) for f in facts))
     ordered = dict(sorted(((p, frozenset(s)) for p, s in allowed.items()), key=lambda item: item[0]))
-    return UncertainComponent(number, facts, ordered, list(comp.choice_vars))
+    return UncertainComponent(number, tuple(facts), ordered, list(comp.choice_vars))
 
 
-def _bounded(enc: Encoding, number: int, comp: Component, read: Sequence[int], solved: Component,
-             facts: tuple[UncertainFact, ...]) -> UncertainComponent:
+def _bounded(enc: Encoding, number: int, comp: Component, facts: Sequence[UncertainFact],
+             decoders: Mapping[UncertainFact, _Decoder], solved: Component) -> UncertainComponent:
     """A component with too many (part, scenario) pairs to list, between bounds: its parts valid
-    in one scenario (each fact at its likelier value, false when none is) are possible, and no
-    other part is robust; the pairs, counted, bound the possible parts from above."""
-    likely = Component([*comp.records, *(Clause((v if _likelier(f) else -v,)) for v, f in zip(read, facts))],
+    in one scenario (each fact at its likeliest value, its first when none is) are possible, and
+    no other part is robust; the pairs, counted, bound the possible parts from above."""
+    likely = Component([*comp.records, *(c for f in facts for c in decoders[f].fixed(_likeliest(f)))],
                        list(comp.choice_vars))
     solve_components(enc.model, [likely], keep=False)
     why = (f"part {number + 1} of the mission has {solved.count} pairs of a decomposition and a scenario of its "
            f"{len(facts)} uncertain facts ({', '.join(f.text for f in facts[:4])}{', ...' if len(facts) > 4 else ''}), "
            f"more than the {MAX_PAIRS} that are listed")
-    return UncertainComponent(number, facts, {}, list(comp.choice_vars),
+    return UncertainComponent(number, tuple(facts), {}, list(comp.choice_vars),
                               bounds=(likely.count, solved.count, likely.count), unlisted=why)
 
 
-def _likelier(fact: UncertainFact) -> bool:
-    return fact.probabilities is not None and fact.probabilities[1] > fact.probabilities[0]
+def _likeliest(fact: UncertainFact) -> Value:
+    if fact.probabilities is None:
+        return fact.values[0]
+    return max(zip(fact.probabilities, range(len(fact.values)), fact.values), key=lambda t: (t[0], -t[1]))[2]
 
 
 def _pairs(comp: Component) -> Iterator[frozenset[int]] | list[frozenset[int]] | None:
     """Every solution of a component solved with its facts among its choices (None when they
-    were only counted)."""
+    were more than are listed, or only counted)."""
     if comp.solutions is not None and len(comp.solutions) <= MAX_PAIRS:
         return comp.solutions
     if comp.layers is not None and comp.count <= MAX_PAIRS:
@@ -337,7 +369,7 @@ def sensing(space: UncertainSpace) -> Sensing:
         others = before[number] * after[number]
         for i, fact in enumerate(c.facts):
             expected = math.fsum(max((math.fsum(c.scenario_probability(s) for s in c.allowed[p] if s[i] == value)
-                                      for p in c.allowed), default=0.0) for value in (False, True))
+                                      for p in c.allowed), default=0.0) for value in fact.values)
             gains.append((fact, expected * others))
     order = {f.atom: i for i, f in enumerate(space.uncertainty.facts)}
     gains.sort(key=lambda item: (-item[1], order[item[0].atom]))
@@ -352,17 +384,17 @@ def _smallest_settling(c: UncertainComponent) -> tuple[UncertainFact, ...] | Non
     every = list(scenarios(c.facts))
     for size in range(k + 1):
         for subset in itertools.combinations(range(k), size):
-            def settled(values: tuple[bool, ...]) -> bool:
+            def settled(values: tuple[Value, ...]) -> bool:
                 consistent = {s for s in every if all(s[i] == v for i, v in zip(subset, values))}
                 return any(consistent <= allowed for allowed in c.allowed.values())
-            if all(settled(values) for values in itertools.product((False, True), repeat=size)):
+            if all(settled(values) for values in itertools.product(*(c.facts[i].values for i in subset))):
                 return tuple(c.facts[i] for i in subset)
     return None
 
 
-def scenarios(facts: Sequence[UncertainFact]) -> Iterator[tuple[bool, ...]]:
-    """Every scenario of boolean ``facts``, in order (all false first)."""
-    return itertools.product((False, True), repeat=len(facts))
+def scenarios(facts: Sequence[UncertainFact]) -> Iterator[Scenario]:
+    """Every scenario of ``facts``, in order (each fact's values in its order: false first)."""
+    return itertools.product(*(f.values for f in facts))
 
 
 __all__ = ["AtomKey", "Judgement", "Sensing", "UncertainComponent", "UncertainSpace", "scenarios", "sensing",
