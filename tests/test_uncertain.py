@@ -80,20 +80,31 @@ class BruteForce:
     """Each scenario's world decomposed as today: the valid decompositions by id, and each
     scenario's probability."""
 
-    def __init__(self, hddl: Path, gm: Path, config: Path, world: Path, entries: list[Entry]) -> None:
+    def __init__(self, hddl: Path, gm: Path, config: Path, world: Path, entries: list[Entry],
+                 joint: tuple[tuple[int, ...], dict[tuple, float]] | None = None) -> None:
+        """``joint``: the entries (by index) of one joint table, and its outcomes' probabilities
+        (those entries' own specs are ignored)."""
         self.valid: list[tuple[float | None, set[frozenset[str]]]] = []
         self.options = [entry_values(spec) for _, _, spec in entries]
-        self.scenarios = list(itertools.product(*(values for values, _ in self.options)))
+        every = list(itertools.product(*(values for values, _ in self.options)))
+        self.scenarios = []
         original = world.read_bytes()
         try:
-            for values in self.scenarios:
+            for values in every:
+                p: float | None = 1.0
+                for i, ((options, probabilities), value) in enumerate(zip(self.options, values)):
+                    if joint is not None and i in joint[0]:
+                        continue
+                    p = None if p is None or probabilities is None else p * probabilities[options.index(value)]
+                if joint is not None and p is not None:
+                    p *= joint[1].get(tuple(values[i] for i in joint[0]), 0.0)
+                if p == 0:
+                    continue  # a scenario that cannot happen
+                self.scenarios.append(values)
                 world.write_bytes(original)
                 rewrite_world(world, {(e, a): v for (e, a, _), v in zip(entries, values)}, world)
                 mission = Mission.load(hddl, gm, config)
                 listed = {ids(mission, d) for d in mission.decomposition_space()} if mission.task_graph.tasks() else set()
-                p: float | None = 1.0
-                for (options, probabilities), value in zip(self.options, values):
-                    p = None if p is None or probabilities is None else p * probabilities[options.index(value)]
                 self.valid.append((p, listed))
         finally:
             world.write_bytes(original)
@@ -330,3 +341,26 @@ def test_an_uncertain_number_read_after_an_increase(tmp_path):
     assert len({frozenset(v) for _, v in brute.valid}) > 2  # the stock decides the method
     mission = Mission.load(hddl_path, gm, config_path, uncertainty=write_uncertainty(tmp_path / "u.json", entries))
     agree(mission, brute)
+
+
+def test_facts_that_are_not_independent(tmp_path):
+    """Two doors read by one sensor: open together or closed together (a joint table), beside an
+    independent fact; a combination the table leaves out cannot happen."""
+    folder = tmp_path / "mission"
+    shutil.copytree(EXAMPLE, folder)
+    hddl, gm, config = mission_files(folder)
+    world = next((folder / "knowledge").iterdir())
+    entries = [("Room102", "door_open", None), ("Room104", "door_open", None), ("Room101", "occupied", 0.1)]
+    table = {(True, True): 0.7, (False, False): 0.3}
+    brute = BruteForce(hddl, gm, config, world, entries, ((0, 1), table))
+    assert len(brute.scenarios) == 4  # 2 of the 4 door combinations, times the patient's 2
+    path = tmp_path / "u.json"
+    path.write_text(json.dumps({
+        "uncertain": [{"entity": e, "attribute": a, **({} if p is None else {"probability": p})} for e, a, p in entries],
+        "joint": [{"facts": [{"entity": "Room102", "attribute": "door_open"}, {"entity": "Room104", "attribute": "door_open"}],
+                   "outcomes": [{"values": list(v), "probability": p} for v, p in table.items()]}]}))
+    mission = Mission.load(hddl, gm, config, uncertainty=path)
+    assert mission.uncertainty.facts[0].probabilities == pytest.approx((0.3, 0.7))  # the table's marginal
+    agree(mission, brute)
+    joined = [c for c in uncertain_space(mission).components if len(c.facts) > 1]
+    assert joined and {f.text for f in joined[0].facts} >= {"door-open(Room102)", "door-open(Room104)"}

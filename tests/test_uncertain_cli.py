@@ -182,3 +182,30 @@ def test_numeric_uncertain_facts_are_checked_and_decided(tmp_path, capsys):
     facts = json.loads(out.read_text())["mission_decomposition_uncertainty"]["uncertain_facts"]
     assert facts[0] == {"fact": "doses(Room201)", "entity": "Room201", "attribute": "stock", "values": ["0", "2"],
                         "probabilities": ["0.5", "0.5"]}
+
+
+def test_bad_joint_tables_are_located(mission, capsys, tmp_path):
+    bad = tmp_path / "joint.json"
+    door, patient = {"entity": "Room202", "attribute": "door_locked"}, {"entity": "Room203", "attribute": "patient_present"}
+    cases = [
+        ({"uncertain": [door], "joint": [{"facts": [door, patient], "outcomes": [{"values": [True, True], "probability": 1}]}]},
+         'Room203.patient_present: a joint table names only facts listed under "uncertain"'),
+        ({"uncertain": [{**door, "probability": 0.2}, patient],
+          "joint": [{"facts": [door, patient], "outcomes": [{"values": [True, True], "probability": 1}]}]},
+         "has probabilities of its own and a joint table"),
+        ({"uncertain": [door, patient], "joint": [{"facts": [door, patient], "outcomes": [
+            {"values": [True, True], "probability": 0.5}, {"values": [False, True], "probability": 0.4}]}]},
+         "the probabilities add up to 0.9, not 1"),
+        ({"uncertain": [door, patient], "joint": [{"facts": [door, patient], "outcomes": [
+            {"values": [True, 2], "probability": 1}]}]}, "gives patient-present(Room203) a value it cannot take"),
+        ({"uncertain": [door, patient], "joint": [{"facts": [door], "outcomes": []}]}, "two or more"),
+    ]
+    for document, message in cases:
+        bad.write_text(json.dumps(document, indent=1))
+        status, _, err = run(capsys, "check", str(mission), "--uncertain", str(bad), "-q")
+        assert status == 2 and message in err and "joint.json:" in err, (message, err)
+    # a good table: the lock and the patient move together (a night-shift lock-up with the patient out)
+    bad.write_text(json.dumps({"uncertain": [door, patient], "joint": [{"facts": [door, patient], "outcomes": [
+        {"values": [False, True], "probability": 0.6}, {"values": [True, False], "probability": 0.4}]}]}))
+    status, out, _ = run(capsys, "explain", str(mission), "--uncertain", str(bad), "-q")
+    assert status == 0 and "most likely decomposition now: valid with probability 0.6" in out

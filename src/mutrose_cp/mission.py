@@ -106,8 +106,9 @@ class Mission(MissionStages):
         is computed: the initial state forgets them."""
         if "initial_state" in self.__dict__:
             raise RuntimeError("read_uncertainty after the initial state was computed")
-        entries, problems = read_uncertainty(path)
+        entries, joints, problems = read_uncertainty(path)
         self.uncertainty_entries = tuple(entries)
+        self.uncertainty_joints = tuple(joints)
         self.uncertainty_source = os.fspath(path)
         try:
             _ = self.uncertainty  # resolved now: its problems are the inputs'

@@ -19,7 +19,7 @@ import os
 from typing import Any
 
 from ..errors import MissionError, Problem
-from ..model.uncertainty import UncertainEntry, Value
+from ..model.uncertainty import JointEntry, UncertainEntry, Value
 from .located_json import LocatedJson, Path, path_text, read_located_json
 
 KEYS = ("entity", "attribute", "probability", "values", "distribution")
@@ -29,11 +29,13 @@ MAX_VALUES = 64
 TOLERANCE = 1e-9
 
 
-def read_uncertainty(path: str | os.PathLike[str]) -> tuple[list[UncertainEntry], list[Problem]]:
-    """The well-formed entries of the uncertainty file at ``path``, in file order, and the
-    problems of the others (so that the caller reports them with those it finds in the
-    entries).  A file that cannot be read, or is not JSON, raises."""
-    return _Reader(read_located_json(path, "uncertainty")).entries()
+def read_uncertainty(path: str | os.PathLike[str]) -> tuple[list[UncertainEntry], list[JointEntry], list[Problem]]:
+    """The well-formed entries and joint tables of the uncertainty file at ``path``, in file
+    order, and the problems of the others (so that the caller reports them with those it finds
+    in the entries).  A file that cannot be read, or is not JSON, raises."""
+    reader = _Reader(read_located_json(path, "uncertainty"))
+    entries, problems = reader.entries()
+    return entries, reader.joints(), problems
 
 
 class _Reader:
@@ -50,8 +52,8 @@ class _Reader:
             raise MissionError(Problem(self.doc.at(()), 'an uncertainty file is an object with a list "uncertain" '
                                                         '(docs/formats/uncertainty.md)'))
         for key in data:
-            if key != "uncertain":
-                self.problem((key,), 'unknown key: an uncertainty file holds "uncertain" only')
+            if key not in ("uncertain", "joint"):
+                self.problem((key,), 'unknown key: an uncertainty file holds "uncertain" and "joint"')
         listed = data["uncertain"]
         if not isinstance(listed, list):
             raise MissionError(Problem(self.doc.at(("uncertain",)), "uncertain: expected a list of entries"))
@@ -63,6 +65,57 @@ class _Reader:
                 self.problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute} is already uncertain "
                                                           f"at {earlier}"))
         return found, self.problems
+
+    def joints(self) -> list[JointEntry]:
+        """The ``joint`` tables: facts that are not independent, with the probability of each
+        combination of their values."""
+        tables = self.doc.data.get("joint", []) if isinstance(self.doc.data, dict) else []
+        if not isinstance(tables, list):
+            self.problem(("joint",), "expected a list of tables")
+            return []
+        found = []
+        for i, table in enumerate(tables):
+            path: Path = ("joint", i)
+            if not isinstance(table, dict) or set(table) != {"facts", "outcomes"}:
+                self.problem(path, 'expected an object {"facts": [...], "outcomes": [...]}')
+                continue
+            facts = table["facts"]
+            if not isinstance(facts, list) or len(facts) < 2 or not all(
+                    isinstance(f, dict) and set(f) == {"entity", "attribute"} and all(isinstance(v, str) for v in f.values())
+                    for f in facts):
+                self.problem((*path, "facts"), 'expected a list of two or more {"entity": ..., "attribute": ...}')
+                continue
+            outcomes = self.outcomes(table["outcomes"], (*path, "outcomes"), len(facts))
+            if outcomes is not None:
+                found.append(JointEntry(tuple((f["entity"].strip(), f["attribute"].strip()) for f in facts), outcomes,
+                                        self.doc.at(path)))
+        return found
+
+    def outcomes(self, listed: Any, path: Path, size: int) -> tuple[tuple[tuple[Value, ...], float], ...] | None:
+        if not isinstance(listed, list) or not listed:
+            self.problem(path, 'expected a list of {"values": [...], "probability": p}')
+            return None
+        found: list[tuple[tuple[Value, ...], float]] = []
+        for i, outcome in enumerate(listed):
+            where: Path = (*path, i)
+            values = outcome.get("values") if isinstance(outcome, dict) else None
+            if not isinstance(outcome, dict) or set(outcome) != {"values", "probability"} or not isinstance(values, list) \
+                    or len(values) != size or not all(isinstance(v, (bool, int, float)) for v in values):
+                self.problem(where, f'expected {{"values": [one per fact, {size}], "probability": p}}')
+                return None
+            p = self.probability(outcome["probability"], (*where, "probability"))
+            if p is None:
+                return None
+            key = tuple(v if isinstance(v, bool) else float(v) for v in values)
+            if any(key == earlier for earlier, _ in found):
+                self.problem(where, "this combination of values is listed twice")
+                return None
+            found.append((key, p))
+        total = math.fsum(p for _, p in found)
+        if abs(total - 1) > TOLERANCE:
+            self.problem(path, f"the probabilities add up to {total:g}, not 1")
+            return None
+        return tuple(found)
 
     def entry(self, item: Any, path: Path) -> UncertainEntry | None:
         """One entry, or None when it has a problem (reported)."""

@@ -12,6 +12,7 @@ Produced by :mod:`mutrose_cp.io.uncertainty` (the file as written) and
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 AtomKey = tuple[str, tuple[str, ...]]
@@ -29,6 +30,17 @@ class UncertainEntry:
     probabilities: tuple[float, ...] | None
     where: str  # file:line:col of the entry
     numeric: bool = False  # given as numbers (values, distribution), not a probability of true
+
+
+@dataclass(frozen=True)
+class JointEntry:
+    """A ``joint`` table of an uncertainty file, as written: facts that are not independent, by
+    (entity, attribute), and the probability of each combination of their values (a combination
+    it does not list has probability 0)."""
+
+    facts: tuple[tuple[str, str], ...]
+    outcomes: tuple[tuple[tuple[Value, ...], float], ...]
+    where: str
 
 
 @dataclass(frozen=True)
@@ -60,11 +72,25 @@ class UncertainFact:
 
 
 @dataclass(frozen=True)
+class Joint:
+    """Facts with a joint distribution: each outcome gives every fact of ``facts`` a value."""
+
+    facts: tuple[UncertainFact, ...]
+    outcomes: tuple[tuple[tuple[Value, ...], float], ...]
+
+    def probability(self, values: dict[AtomKey, Value]) -> float:
+        """The probability that the facts of ``values`` (some of this table's) have those values."""
+        return math.fsum(p for outcome, p in self.outcomes
+                         if all(values.get(f.atom, v) == v for f, v in zip(self.facts, outcome)))
+
+
+@dataclass(frozen=True)
 class Uncertainty:
-    """The uncertain facts of a mission, in file order."""
+    """The uncertain facts of a mission, in file order, and their joint tables."""
 
     source: str
     facts: tuple[UncertainFact, ...]
+    joints: tuple[Joint, ...] = ()
 
     @property
     def with_probabilities(self) -> bool:

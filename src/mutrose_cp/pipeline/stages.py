@@ -21,7 +21,7 @@ from ..model.task_graph import TaskGraph
 from .task_graph_builder import build_task_graph
 from .initial_state import build_initial_state, build_sorts
 from .uncertain_facts import resolve_uncertainty
-from ..model.uncertainty import UncertainEntry, Uncertainty
+from ..model.uncertainty import JointEntry, UncertainEntry, Uncertainty
 from .recursion import deep
 
 
@@ -44,6 +44,7 @@ class MissionStages:
     # the entries of an uncertainty file and its name (docs/formats/uncertainty.md); None: the
     # world is read as it is written
     uncertainty_entries: tuple[UncertainEntry, ...] | None = None
+    uncertainty_joints: tuple[JointEntry, ...] = ()
     uncertainty_source: str = ""
 
     @cached_property
@@ -53,7 +54,7 @@ class MissionStages:
             return None
         sorts = build_sorts(self.domain, self.config, self.knowledge)
         return resolve_uncertainty(self.uncertainty_entries, self.uncertainty_source, self.config, sorts,
-                                   self.goal_model)
+                                   self.goal_model, self.uncertainty_joints)
 
     @cached_property
     def initial_state(self) -> InitialState:

@@ -9,17 +9,19 @@ the goal and the condition, rather than answered as if the instances were fixed.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Iterable, Iterator
 
 from ..errors import MissionError, Problem, closest
 from ..model import Configuration, GoalModel, SemanticMapping
 from ..model.expressions import Atom, BoolOp, Condition
-from ..model.uncertainty import UncertainEntry, UncertainFact, Uncertainty
+from ..model.uncertainty import Joint, JointEntry, UncertainEntry, UncertainFact, Uncertainty
 
 
 def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: Configuration,
-                        sorts: dict[str, frozenset[str]], goal_model: GoalModel) -> Uncertainty:
-    """The uncertain facts of the mission; every problem at once (exit 2)."""
+                        sorts: dict[str, frozenset[str]], goal_model: GoalModel,
+                        joints: Iterable[JointEntry] = ()) -> Uncertainty:
+    """The uncertain facts of the mission and their joint tables; every problem at once (exit 2)."""
     problems: list[Problem] = []
     facts: list[UncertainFact] = []
     seen: set[tuple[str, tuple[str, ...]]] = set()
@@ -44,9 +46,48 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
             continue
         seen.add(fact.atom)
         facts.append(fact)
+    tables = _joints(joints, facts, problems)
     if problems:
         raise MissionError(problems)
-    return Uncertainty(source, tuple(facts))
+    # a fact of a joint table has the marginal of the table as its probabilities
+    marginal = {f.atom: tuple(j.probability({f.atom: v}) for v in f.values) for j in tables for f in j.facts}
+    resolved = tuple(replace(f, probabilities=marginal[f.atom]) if f.atom in marginal else f for f in facts)
+    by_atom = {f.atom: f for f in resolved}
+    tables = [Joint(tuple(by_atom[f.atom] for f in j.facts), j.outcomes) for j in tables]
+    return Uncertainty(source, resolved, tuple(tables))
+
+
+def _joints(joints: Iterable[JointEntry], facts: list[UncertainFact], problems: list[Problem]) -> list[Joint]:
+    """The joint tables over the resolved facts: each names uncertain entries given without
+    probabilities of their own, once, with values they may take."""
+    by_name = {(f.entry.entity, f.entry.attribute): f for f in facts}
+    tables: list[Joint] = []
+    placed: dict[tuple[str, str], str] = {}
+    for j in joints:
+        found: list[UncertainFact] = []
+        for name in j.facts:
+            fact = by_name.get(name)
+            if fact is None:
+                problems.append(Problem(j.where, f"{name[0]}.{name[1]}: a joint table names only facts listed under "
+                                                 '"uncertain"'))
+            elif fact.entry.probabilities is not None:
+                problems.append(Problem(fact.entry.where, f"{fact.text} has probabilities of its own and a joint table "
+                                                          f"at {j.where}: give them in one place"))
+            elif placed.setdefault(name, j.where) != j.where:
+                problems.append(Problem(j.where, f"{fact.text} is in the joint table at {placed[name]} already"))
+            else:
+                found.append(fact)
+        if len(found) != len(j.facts):
+            continue
+        bad = [(outcome, f) for outcome, _ in j.outcomes for f, v in zip(found, outcome)
+               if v not in f.values or isinstance(v, bool) == f.numeric]
+        if bad:
+            outcome, fact = bad[0]
+            problems.append(Problem(j.where, f"the outcome {list(outcome)} gives {fact.text} a value it cannot take "
+                                             f"(one of {', '.join(str(v) for v in fact.values)})"))
+            continue
+        tables.append(Joint(tuple(found), j.outcomes))
+    return tables
 
 
 class _AttributeMappings:

@@ -10,8 +10,10 @@ independent components as before; a component now holds the facts its decomposit
 * a part is **robust** when every scenario of its component's facts allows it;
 * **possible** when some scenario does, with the assumptions it needs (the values every
   allowing scenario gives a fact);
-* its **probability** of being valid is the sum of its allowing scenarios' probabilities (the
-  facts are independent: a scenario's probability is the product of its values').
+* its **probability** of being valid is the sum of its allowing scenarios' probabilities (a
+  scenario's probability is the product of its independent facts' and of its joint tables';
+  the facts of one table are joined into one component, and a scenario of probability 0 is
+  none).
 
 A mission decomposition is one part per component, and the components share no fact, so it is
 robust when all its parts are, possible when all are, and its probability is the product of its
@@ -32,7 +34,7 @@ from functools import cached_property
 from typing import Iterable, Iterator, Mapping, Sequence
 
 from ..errors import MissionError
-from ..model.uncertainty import AtomKey, UncertainFact, Uncertainty, Value
+from ..model.uncertainty import AtomKey, Joint, UncertainFact, Uncertainty, Value
 from ..pipeline.stages import MissionStages
 from .boolean_model import TRUE, Clause
 from .cpsat import Component, DecompositionSpace, solve_components, split_components
@@ -69,9 +71,25 @@ class UncertainComponent:
         n = sum(1 for p in self.allowed if not robust or self.robust(p))
         return n, n
 
+    joints: tuple[Joint, ...] = ()  # the joint tables of its facts
+
     @property
+    def known(self) -> bool:
+        """Whether its facts have probabilities (then a scenario of probability 0 is none)."""
+        return all(f.probabilities is not None for f in self.facts)
+
+    @cached_property
     def scenarios(self) -> int:
-        return math.prod(len(f.values) for f in self.facts)
+        """How many scenarios its facts can be in (of positive probability, when known)."""
+        if not self.known:
+            return math.prod(len(f.values) for f in self.facts)
+        joined = {f.atom for j in self.joints for f in j.facts}
+        count = math.prod(sum(1 for p in f.probabilities or () if p > 0) for f in self.facts if f.atom not in joined)
+        mine = {f.atom for f in self.facts}
+        for j in self.joints:
+            places = [i for i, f in enumerate(j.facts) if f.atom in mine]
+            count *= len({tuple(outcome[i] for i in places) for outcome, p in j.outcomes if p > 0})
+        return count
 
     def robust(self, part: Part) -> bool:
         return len(self.allowed[part]) == self.scenarios
@@ -83,11 +101,15 @@ class UncertainComponent:
         return math.fsum(self.scenario_probability(s) for s in self.allowed[part])
 
     def scenario_probability(self, scenario: Scenario) -> float:
-        p = 1.0
+        """The product of its independent facts' probabilities and of its joint tables'."""
+        values = {f.atom: v for f, v in zip(self.facts, scenario)}
+        joined = {f.atom for j in self.joints for f in j.facts}
+        p = math.prod(j.probability(values) for j in self.joints)
         for fact, value in zip(self.facts, scenario):
-            probability = fact.probability(value)
-            assert probability is not None
-            p *= probability
+            if fact.atom not in joined:
+                probability = fact.probability(value)
+                assert probability is not None
+                p *= probability
         return p
 
     def assumptions(self, part: Part) -> list[tuple[UncertainFact, Value]]:
@@ -234,6 +256,10 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
                     for atom, choices in enc.uncertain_numbers.items())
     order = {f.atom: i for i, f in enumerate(uncertainty.facts)}
     var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
+    for joint in uncertainty.joints:  # facts that are not independent are decided together
+        linked = [decoders[f].variables[0] for f in joint.facts if f in decoders]
+        if len(linked) > 1:
+            enc.model.records.append(Clause((linked[0], -linked[0], *linked[1:])))  # always true: it only joins
     kept: list[tuple[int, Component, list[UncertainFact]]] = []
     for number, comp in enumerate(split_components(enc)):
         facts = sorted({fact_of[v] for r in comp.records for v in r.variables() if v in fact_of},
@@ -246,7 +272,7 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
              for _, comp, facts in kept]
     solve_components(enc.model, [p for p in pairs if p.records], keep=True, list_limit=MAX_PAIRS)
     # a component of neither choices nor facts only constrains: kept when it rules out everything
-    components = [_decided(enc, number, comp, facts, decoders, solved, var_to_dec)
+    components = [_decided(enc, number, comp, facts, decoders, solved, var_to_dec, uncertainty.joints)
                   for (number, comp, facts), solved in zip(kept, pairs)
                   if comp.choice_vars or facts or solved.count == 0]
     return UncertainSpace(enc, uncertainty, components, var_to_dec)
@@ -275,16 +301,19 @@ class _Decoder:
 
 def _decided(enc: Encoding, number: int, comp: Component, facts: Sequence[UncertainFact],
              decoders: Mapping[UncertainFact, _Decoder], solved: Component,
-             var_to_dec: Mapping[int, int]) -> UncertainComponent:
+             var_to_dec: Mapping[int, int], joints: Sequence[Joint]) -> UncertainComponent:
     listed = _pairs(solved)
     if listed is None:
         return _bounded(enc, number, comp, facts, decoders, solved)
+    component = UncertainComponent(number, tuple(facts), {}, list(comp.choice_vars), joints=_joints_of(facts, joints))
     allowed: dict[Part, set[Scenario]] = {}
     for solution in listed:
         part = tuple(sorted(var_to_dec[v] for v in solution if v in var_to_dec))
-        allowed.setdefault(part, set()).add(tuple(decoders[f].value(solution) for f in facts))
-    ordered = dict(sorted(((p, frozenset(s)) for p, s in allowed.items()), key=lambda item: item[0]))
-    return UncertainComponent(number, tuple(facts), ordered, list(comp.choice_vars))
+        scenario = tuple(decoders[f].value(solution) for f in facts)
+        if not component.known or component.scenario_probability(scenario) > 0:  # else it cannot happen
+            allowed.setdefault(part, set()).add(scenario)
+    component.allowed = dict(sorted(((p, frozenset(s)) for p, s in allowed.items()), key=lambda item: item[0]))
+    return component
 
 
 def _bounded(enc: Encoding, number: int, comp: Component, facts: Sequence[UncertainFact],
@@ -300,6 +329,11 @@ def _bounded(enc: Encoding, number: int, comp: Component, facts: Sequence[Uncert
            f"more than the {MAX_PAIRS} that are listed")
     return UncertainComponent(number, tuple(facts), {}, list(comp.choice_vars),
                               bounds=(likely.count, solved.count, likely.count), unlisted=why)
+
+
+def _joints_of(facts: Sequence[UncertainFact], joints: Sequence[Joint]) -> tuple[Joint, ...]:
+    mine = {f.atom for f in facts}
+    return tuple(j for j in joints if any(f.atom in mine for f in j.facts))
 
 
 def _likeliest(fact: UncertainFact) -> Value:
@@ -350,7 +384,8 @@ def sensing(space: UncertainSpace) -> Sensing:
     for c in space.components:
         settled = _smallest_settling(c)
         if settled is None:
-            hopeless = next(s for s in scenarios(c.facts) if not any(s in allowed for allowed in c.allowed.values()))
+            hopeless = next(s for s in scenarios(c.facts) if (not c.known or c.scenario_probability(s) > 0)
+                            and not any(s in allowed for allowed in c.allowed.values()))
             values = ", ".join(f.shown(v) for f, v in zip(c.facts, hopeless)) or "whatever the facts are"
             chosen, reason = None, f"no decomposition is valid when {values}: sensing cannot settle the mission"
             break
@@ -381,7 +416,7 @@ def _smallest_settling(c: UncertainComponent) -> tuple[UncertainFact, ...] | Non
     they take, some part is allowed by every scenario with those values; None when no part is
     allowed in some scenario (then no set does)."""
     k = len(c.facts)
-    every = list(scenarios(c.facts))
+    every = [s for s in scenarios(c.facts) if not c.known or c.scenario_probability(s) > 0]
     for size in range(k + 1):
         for subset in itertools.combinations(range(k), size):
             def settled(values: tuple[Value, ...]) -> bool:
