@@ -21,7 +21,7 @@ from ..errors import MissionError, NoDecompositionError, Problem
 from ..interrupt import phase
 from ..mission import Mission
 from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
-from .flow import expanded, load_mission, mission_paths, refuse_outputs, report_warnings
+from .flow import expanded, load_mission, mission_paths, read_uncertainty, refuse_outputs, report_warnings
 from .process import keep_until_exit
 from ..solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from ..solve.optimize import CostModel
@@ -89,9 +89,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     hddl, gm, cfg, folder = mission_paths(args)
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
-    uncertain = args.uncertain or (None if args.as_written else mission.configured_uncertainty())
-    if uncertain:
-        mission.read_uncertainty(uncertain)
+    read_uncertainty(mission, args.uncertain, args.as_written)
     base = (folder if folder is not None else cfg.parent.parent).resolve()
     written = (base / mission.config.output.file_path).resolve()
     if base != written and base not in written.parents:

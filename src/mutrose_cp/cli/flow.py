@@ -47,17 +47,22 @@ def load_mission(hddl: PathArgument, gm: PathArgument, cfg: PathArgument, *, len
     file ``uncertain`` or the one the configuration names (unless ``as_written``); another says
     that it reads the world as written."""
     mission = Mission.load(hddl, gm, cfg, lenient_xml=lenient_xml)
-    configured = mission.configured_uncertainty()
-    if as_written:
-        configured = None
-    if reads_uncertainty and (uncertain or configured):
-        mission.read_uncertainty(uncertain or configured)  # type: ignore[arg-type]
-    elif configured is not None and not quiet:
+    if reads_uncertainty:
+        read_uncertainty(mission, uncertain, as_written)
+    elif mission.configured_uncertainty() is not None and not quiet:
         print_warning(f"{mission.config.locate('uncertainty')}: this command does not read the uncertainty file "
-                      f"{configured}: the world is read as written")
+                      f"{mission.configured_uncertainty()}: the world is read as written")
     if not quiet:
         report_warnings(mission)
     return mission
+
+
+def read_uncertainty(mission: Mission, uncertain: PathArgument | None, as_written: bool) -> None:
+    """Read the uncertainty file ``uncertain``, else the one the configuration names (unless
+    ``as_written``), if any."""
+    path = uncertain or (None if as_written else mission.configured_uncertainty())
+    if path:
+        mission.read_uncertainty(path)
 
 
 def report_warnings(mission: Mission) -> None:

@@ -96,6 +96,3 @@ class Uncertainty:
     def with_probabilities(self) -> bool:
         """Whether every fact has probabilities (then every answer has one)."""
         return all(f.probabilities is not None for f in self.facts)
-
-    def fact(self, atom: AtomKey) -> UncertainFact | None:
-        return next((f for f in self.facts if f.atom == atom), None)

@@ -206,7 +206,7 @@ class DecompositionSpace:
     @cached_property
     def fixed(self) -> list[int]:
         """Decompositions chosen in every solution through constant literals."""
-        return [d for d, lit in self.encoding.decomposition_lit.items() if lit == TRUE]
+        return fixed_decompositions(self.encoding)
 
     def __iter__(self) -> Iterator[list[int]]:
         """All decompositions, in mixed-radix order over the components (last varies fastest)."""
@@ -448,9 +448,18 @@ def build_space(enc: Encoding, keep: bool = True, progress: Callable[[int, int],
                 list_limit: int = ENUMERATION_CAP) -> DecompositionSpace:
     comps = split_components(enc)
     solve_components(enc.model, comps, keep, list_limit, progress)
-    var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
     # components without decomposition literals only constrain (e.g. all-constant checks)
-    return DecompositionSpace(enc, [c for c in comps if c.choice_vars or c.count == 0], var_to_dec)
+    return DecompositionSpace(enc, [c for c in comps if c.choice_vars or c.count == 0], decomposition_variables(enc))
+
+
+def decomposition_variables(enc: Encoding) -> dict[int, int]:
+    """Decomposition literal (a variable) -> its decomposition vertex; constant ones left out."""
+    return {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
+
+
+def fixed_decompositions(enc: Encoding) -> list[int]:
+    """The decompositions whose literal is the constant true: chosen in every solution."""
+    return [d for d, lit in enc.decomposition_lit.items() if lit == TRUE]
 
 
 def solve_components(bm: BoolModel, comps: Sequence[Component], keep: bool = True, list_limit: int = ENUMERATION_CAP,

@@ -36,8 +36,15 @@ from typing import Iterable, Iterator, Mapping, Sequence
 from ..errors import MissionError
 from ..model.uncertainty import AtomKey, Joint, UncertainFact, Uncertainty, Value
 from ..pipeline.stages import MissionStages
-from .boolean_model import TRUE, Clause
-from .cpsat import Component, DecompositionSpace, solve_components, split_components
+from .boolean_model import Clause
+from .cpsat import (
+    Component,
+    DecompositionSpace,
+    decomposition_variables,
+    fixed_decompositions,
+    solve_components,
+    split_components,
+)
 from .encoding import Encoder, Encoding
 
 #: at most this many uncertain facts of one component whose subsets are searched for sensing
@@ -72,19 +79,29 @@ class UncertainComponent:
         return n, n
 
     joints: tuple[Joint, ...] = ()  # the joint tables of its facts
+    weights: dict[Scenario, float] = field(default_factory=dict, repr=False, compare=False)  # probability by scenario
 
-    @property
+    @cached_property
     def known(self) -> bool:
         """Whether its facts have probabilities (then a scenario of probability 0 is none)."""
         return all(f.probabilities is not None for f in self.facts)
+
+    @cached_property
+    def joined(self) -> frozenset[AtomKey]:
+        """The atoms of its facts that a joint table weighs (the others are independent)."""
+        return frozenset(f.atom for j in self.joints for f in j.facts)
+
+    def can_happen(self, scenario: Scenario) -> bool:
+        """Whether ``scenario`` has a positive probability (every one does without probabilities)."""
+        return not self.known or self.scenario_probability(scenario) > 0
 
     @cached_property
     def scenarios(self) -> int:
         """How many scenarios its facts can be in (of positive probability, when known)."""
         if not self.known:
             return math.prod(len(f.values) for f in self.facts)
-        joined = {f.atom for j in self.joints for f in j.facts}
-        count = math.prod(sum(1 for p in f.probabilities or () if p > 0) for f in self.facts if f.atom not in joined)
+        count = math.prod(sum(1 for p in f.probabilities or () if p > 0) for f in self.facts
+                          if f.atom not in self.joined)
         mine = {f.atom for f in self.facts}
         for j in self.joints:
             places = [i for i, f in enumerate(j.facts) if f.atom in mine]
@@ -96,20 +113,23 @@ class UncertainComponent:
 
     def probability(self, part: Part) -> float | None:
         """The probability that ``part`` is valid (None when a fact has no probabilities)."""
-        if any(f.probabilities is None for f in self.facts):
+        if not self.known:
             return None
         return math.fsum(self.scenario_probability(s) for s in self.allowed[part])
 
     def scenario_probability(self, scenario: Scenario) -> float:
-        """The product of its independent facts' probabilities and of its joint tables'."""
-        values = {f.atom: v for f, v in zip(self.facts, scenario)}
-        joined = {f.atom for j in self.joints for f in j.facts}
-        p = math.prod(j.probability(values) for j in self.joints)
-        for fact, value in zip(self.facts, scenario):
-            if fact.atom not in joined:
-                probability = fact.probability(value)
-                assert probability is not None
-                p *= probability
+        """The product of its independent facts' probabilities and of its joint tables',
+        computed once per scenario (a part's probability sums them, and parts share them)."""
+        p = self.weights.get(scenario)
+        if p is None:
+            values = {f.atom: v for f, v in zip(self.facts, scenario)}
+            p = math.prod(j.probability(values) for j in self.joints)
+            for fact, value in zip(self.facts, scenario):
+                if fact.atom not in self.joined:
+                    probability = fact.probability(value)
+                    assert probability is not None
+                    p *= probability
+            self.weights[scenario] = p
         return p
 
     def assumptions(self, part: Part) -> list[tuple[UncertainFact, Value]]:
@@ -131,7 +151,7 @@ class UncertainSpace:
     @cached_property
     def fixed(self) -> list[int]:
         """Decompositions chosen in every decomposition."""
-        return [d for d, lit in self.encoding.decomposition_lit.items() if lit == TRUE]
+        return fixed_decompositions(self.encoding)
 
     def count(self, robust: bool) -> int:
         """How many decompositions are valid whatever the facts (``robust``), or for some value
@@ -247,15 +267,13 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
     enc = Encoder(tg, stages.constraints, stages.domain, stages.goal_model, stages.config, stages.initial_state,
                   uncertain=[f.atom for f in uncertainty.facts if not f.numeric],
                   uncertain_numbers={f.atom: [float(v) for v in f.values] for f in uncertainty.facts if f.numeric}).encode()
-    # each variable of a fact, with the value the fact has when it is true (a boolean's False
-    # when its one variable is false)
-    fact_of: dict[int, UncertainFact] = {v: by_atom[atom] for atom, v in enc.uncertain.items()}
-    fact_of.update((v, by_atom[atom]) for atom, choices in enc.uncertain_numbers.items() for v in choices)
+    # each fact's variables, read as its value (a boolean's one variable; a number's choices)
     decoders = {by_atom[atom]: _Decoder((v,), (True,)) for atom, v in enc.uncertain.items()}
     decoders.update((by_atom[atom], _Decoder(choices, by_atom[atom].values))
                     for atom, choices in enc.uncertain_numbers.items())
+    fact_of = {v: fact for fact, decoder in decoders.items() for v in decoder.variables}
     order = {f.atom: i for i, f in enumerate(uncertainty.facts)}
-    var_to_dec = {lit: d for d, lit in enc.decomposition_lit.items() if isinstance(lit, int)}
+    var_to_dec = decomposition_variables(enc)
     for joint in uncertainty.joints:  # facts that are not independent are decided together
         linked = [decoders[f].variables[0] for f in joint.facts if f in decoders]
         if len(linked) > 1:
@@ -310,7 +328,7 @@ def _decided(enc: Encoding, number: int, comp: Component, facts: Sequence[Uncert
     for solution in listed:
         part = tuple(sorted(var_to_dec[v] for v in solution if v in var_to_dec))
         scenario = tuple(decoders[f].value(solution) for f in facts)
-        if not component.known or component.scenario_probability(scenario) > 0:  # else it cannot happen
+        if component.can_happen(scenario):
             allowed.setdefault(part, set()).add(scenario)
     component.allowed = dict(sorted(((p, frozenset(s)) for p, s in allowed.items()), key=lambda item: item[0]))
     return component
@@ -337,9 +355,9 @@ def _joints_of(facts: Sequence[UncertainFact], joints: Sequence[Joint]) -> tuple
 
 
 def _likeliest(fact: UncertainFact) -> Value:
-    if fact.probabilities is None:
-        return fact.values[0]
-    return max(zip(fact.probabilities, range(len(fact.values)), fact.values), key=lambda t: (t[0], -t[1]))[2]
+    """The fact's likeliest value, the first of the likeliest (its first without probabilities)."""
+    weights = fact.probabilities or (0.0,) * len(fact.values)
+    return fact.values[max(range(len(fact.values)), key=lambda i: (weights[i], -i))]
 
 
 def _pairs(comp: Component) -> Iterator[frozenset[int]] | list[frozenset[int]] | None:
@@ -384,8 +402,8 @@ def sensing(space: UncertainSpace) -> Sensing:
     for c in space.components:
         settled = _smallest_settling(c)
         if settled is None:
-            hopeless = next(s for s in scenarios(c.facts) if (not c.known or c.scenario_probability(s) > 0)
-                            and not any(s in allowed for allowed in c.allowed.values()))
+            hopeless = next(s for s in scenarios(c.facts)
+                            if c.can_happen(s) and not any(s in allowed for allowed in c.allowed.values()))
             values = ", ".join(f.shown(v) for f, v in zip(c.facts, hopeless)) or "whatever the facts are"
             chosen, reason = None, f"no decomposition is valid when {values}: sensing cannot settle the mission"
             break
@@ -416,7 +434,7 @@ def _smallest_settling(c: UncertainComponent) -> tuple[UncertainFact, ...] | Non
     they take, some part is allowed by every scenario with those values; None when no part is
     allowed in some scenario (then no set does)."""
     k = len(c.facts)
-    every = [s for s in scenarios(c.facts) if not c.known or c.scenario_probability(s) > 0]
+    every = [s for s in scenarios(c.facts) if c.can_happen(s)]
     for size in range(k + 1):
         for subset in itertools.combinations(range(k), size):
             def settled(values: tuple[Value, ...]) -> bool:
