@@ -209,3 +209,10 @@ def test_bad_joint_tables_are_located(mission, capsys, tmp_path):
         {"values": [False, True], "probability": 0.6}, {"values": [True, False], "probability": 0.4}]}]}))
     status, out, _ = run(capsys, "explain", str(mission), "--uncertain", str(bad), "-q")
     assert status == 0 and "most likely decomposition now: valid with probability 0.6" in out
+
+
+def test_an_uncertainty_file_over_the_input_limit_is_refused(mission, capsys, tmp_path):
+    big = tmp_path / "big.json"
+    big.write_text(json.dumps({"uncertain": [{"entity": "Room202", "attribute": "door_locked"}], "pad": "x" * 2_000_000}))
+    status, _, err = run(capsys, "count", str(mission), "--uncertain", str(big), "--max-input-mb", "1", "-q")
+    assert status == 2 and "over the input limit of 1 MB" in err

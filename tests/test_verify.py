@@ -331,3 +331,11 @@ def test_a_witness_is_drawn_from_its_file(tmp_path, capsys):
     assert main(["graph", str(folder), "--view", "decomposition", "--from-output", str(witness), "-o", str(witness)]) == 2
     assert json.loads(witness.read_text()) == listed  # the witness was not overwritten
     assert not (tmp_path / "f.dot").exists()
+
+
+def test_a_witness_read_from_a_fifo_never_blocks(tmp_path, capsys):
+    fifo = tmp_path / "witness.json"
+    os.mkfifo(fifo)
+    assert main(["graph", str(EXAMPLE), "--view", "decomposition", "--from-output", str(fifo),
+                 "-o", str(tmp_path / "w.dot"), "-q"]) == 2
+    assert "not a regular file" in capsys.readouterr().err and not (tmp_path / "w.dot").exists()
