@@ -478,6 +478,7 @@ def cmd_count(args: argparse.Namespace) -> int:
     with phase("solving"):
         space = mission.decomposition_space(_Progress(not args.quiet, "components solved"), keep=False)
         total = space.count
+    keep_until_exit(space)
     elapsed = time.perf_counter() - start
     _summary(args, {"command": "count", "mission_decompositions": str(total), "components": len(space.components),
                     "seconds": round(elapsed, 3)},
@@ -497,6 +498,7 @@ def _count_uncertain(args: argparse.Namespace, mission: Mission, start: float) -
     with phase("solving"):
         space = uncertain_space(mission)
         robust, possible = space.bounds(robust=True), space.bounds(robust=False)
+    keep_until_exit(space)
     low, high = robust if args.robust else possible
     elapsed = time.perf_counter() - start
     facts = len(mission.uncertainty.facts) if mission.uncertainty is not None else 0

@@ -18,6 +18,7 @@ from ..mission import Mission
 from ..model.task_graph import TaskGraph
 from ..output.files import refuse_unsafe_outputs
 from ..pipeline.constraints import Constraints
+from .process import keep_until_exit
 
 PathArgument = str | os.PathLike[str]
 
@@ -54,6 +55,7 @@ def load_mission(hddl: PathArgument, gm: PathArgument, cfg: PathArgument, *, len
                       f"{mission.configured_uncertainty()}: the world is read as written")
     if not quiet:
         report_warnings(mission)
+    keep_until_exit(mission)  # with its stages, freed by the process's end, not one object at a time
     return mission
 
 

@@ -21,6 +21,7 @@ from ..output.counts import shown_count
 from ..output.uncertainty_section import shown_probability
 from ..solve.uncertain import sensing, uncertain_space
 from .flow import expanded, load_mission, mission_paths
+from .process import keep_until_exit
 
 ANSWERED, NOTHING_VALID = 0, 3
 
@@ -39,6 +40,7 @@ def cmd_explain(args: argparse.Namespace) -> int:
         space = uncertain_space(mission)
         robust, possible = space.count(robust=True), space.count(robust=False)
         plan = sensing(space)
+    keep_until_exit(space)
     lines = [f"{shown_count(possible)} mission decompositions are valid for some value of the "
              f"{len(mission.uncertainty.facts)} uncertain facts, {shown_count(robust)} whatever their values"]
     if plan.facts is None:

@@ -27,6 +27,7 @@ from ..output.formats import write_output
 from ..pipeline.property_checks import check_properties
 from ..solve.verify import Verdict
 from .flow import expanded, load_mission, mission_paths, refuse_outputs
+from .process import keep_until_exit
 
 HOLDS, FAILS, NO_DECOMPOSITION = 0, 1, 3
 
@@ -47,6 +48,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     with phase("deciding the properties"):
         space = mission.decomposition_space()  # built once for all of them
         verdicts = [mission.verify(p, space) for p in properties]
+    keep_until_exit(space, verdicts)
     written = _write_witnesses(mission, verdicts, witnesses) if witnesses else {}
     for v in verdicts:
         print(_line(v, written.get(v.property.name)))
