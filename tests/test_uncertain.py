@@ -19,6 +19,7 @@ from lxml import etree
 from mutrose_cp.errors import MissionError
 from mutrose_cp.mission import Mission
 from mutrose_cp.pipeline.uncertain_facts import goal_model_reads
+from mutrose_cp.solve.scenarios import ExpandedSpace, decided_space
 from mutrose_cp.solve.uncertain import sensing, uncertain_space
 from conftest import ROOT, require_reference
 from missiongen import MissionSpec, missions
@@ -72,8 +73,19 @@ def rewrite_world(world: Path, values: dict[tuple[str, str], bool | float], out:
     tree.write(str(out))
 
 
-def ids(mission: Mission, decomposition) -> frozenset[str]:
-    return frozenset(mission.task_graph.decomposition(v).decomposition.id for v in decomposition)
+def ids(mission, decomposition) -> frozenset[str]:
+    tg = mission.task_graph if isinstance(mission, Mission) else mission
+    return frozenset(tg.decomposition(v).decomposition.id for v in decomposition)
+
+
+def content(tg, decomposition) -> frozenset[tuple]:
+    """A decomposition by what it does, not by task ids: each task decomposition's goal-model
+    task, HDDL task, location, variable values and method path."""
+    def of(v: int) -> tuple:
+        d = tg.decomposition(v).decomposition
+        i = d.instance
+        return i.gm_task, i.name, str(i.location), tuple((p.hddl_param, str(p.value)) for p in i.parameters), d.number
+    return frozenset(of(v) for v in decomposition)
 
 
 class BruteForce:
@@ -81,9 +93,11 @@ class BruteForce:
     scenario's probability."""
 
     def __init__(self, hddl: Path, gm: Path, config: Path, world: Path, entries: list[Entry],
-                 joint: tuple[tuple[int, ...], dict[tuple, float]] | None = None) -> None:
+                 joint: tuple[tuple[int, ...], dict[tuple, float]] | None = None, identity=None) -> None:
         """``joint``: the entries (by index) of one joint table, and its outcomes' probabilities
-        (those entries' own specs are ignored)."""
+        (those entries' own specs are ignored).  ``identity``: a decomposition's identity
+        (its task decompositions' ids; by content when the worlds expand differently)."""
+        identity = identity or ids
         self.valid: list[tuple[float | None, set[frozenset[str]]]] = []
         self.options = [entry_values(spec) for _, _, spec in entries]
         every = list(itertools.product(*(values for values, _ in self.options)))
@@ -104,7 +118,8 @@ class BruteForce:
                 world.write_bytes(original)
                 rewrite_world(world, {(e, a): v for (e, a, _), v in zip(entries, values)}, world)
                 mission = Mission.load(hddl, gm, config)
-                listed = {ids(mission, d) for d in mission.decomposition_space()} if mission.task_graph.tasks() else set()
+                listed = ({identity(mission.task_graph, d) for d in mission.decomposition_space()}
+                          if mission.task_graph.tasks() else set())
                 self.valid.append((p, listed))
         finally:
             world.write_bytes(original)
@@ -364,3 +379,80 @@ def test_facts_that_are_not_independent(tmp_path):
     agree(mission, brute)
     joined = [c for c in uncertain_space(mission).components if len(c.facts) > 1]
     assert joined and {f.text for f in joined[0].facts} >= {"door-open(Room102)", "door-open(Room104)"}
+
+
+def agree_expanded(mission: Mission, brute: BruteForce) -> None:
+    """Every answer where the goal model reads uncertain facts, against the brute force by
+    content: counts, the robust listing, each possible decomposition's judgement (in a world
+    where it exists), the most likely one, and what to sense."""
+    space = decided_space(mission)
+    assert isinstance(space, ExpandedSpace)
+    assert space.count(robust=False) == len(brute.possible)
+    assert space.count(robust=True) == len(brute.robust)
+    if brute.robust:
+        frame = space.frame_world.stages.task_graph
+        assert {content(frame, d) for d in space.space(robust=True)} == brute.robust
+    else:
+        assert space.space(robust=True).count == 0
+    worlds = [(i, w.stages.task_graph) for i, w in enumerate(space.worlds) if w.live]
+    for key in brute.possible:
+        i, tg = next((i, tg) for i, tg in worlds if {content(tg, [d.index]) for d in tg.decompositions()} >= {
+            frozenset([k]) for k in key})
+        space.frame = i
+        by_content = {next(iter(content(tg, [d.index]))): d.index for d in tg.decompositions()}
+        judged = space.judge([by_content[k] for k in key])
+        assert judged.possible and judged.robust == (key in brute.robust)
+        expected = brute.probability(key)
+        assert (judged.probability is None) == (expected is None)
+        if expected is not None:
+            assert judged.probability == pytest.approx(expected, abs=1e-12)
+        for fact, value in judged.needs:
+            index = mission.uncertainty.facts.index(fact)
+            assert all(values[index] == value for (_, valid), values in zip(brute.valid, brute.scenarios) if key in valid)
+    plan = sensing(space)
+    settles = brute.settling_sets()
+    if plan.facts is None:
+        assert not settles
+    else:
+        chosen = frozenset(mission.uncertainty.facts.index(f) for f in plan.facts)
+        assert chosen in settles and len(chosen) == min(len(s) for s in settles)
+    if mission.uncertainty.with_probabilities and brute.possible:
+        best_probability = max(brute.probability(k) or 0 for k in brute.possible)
+        assert plan.best == pytest.approx(best_probability, abs=1e-12)
+        expected = {mission.uncertainty.facts[i].text: brute.expected_best(i) for i in range(len(brute.scenarios[0]))}
+        for fact, gain in plan.gains:
+            assert gain == pytest.approx(expected[fact.text], abs=1e-12), fact.text
+        best, probability = space.most_likely({})
+        assert probability == pytest.approx(best_probability, abs=1e-12)
+        frame = space.frame_world.stages.task_graph
+        assert brute.probability(content(frame, best)) == pytest.approx(probability, abs=1e-12)
+
+
+@pytest.mark.parametrize("entries", [
+    [("Room101", "needs_disinfection", 0.3)],
+    [("Room101", "needs_disinfection", 0.3), ("Room104", "door_open", 0.5)],
+    [("Room104", "needs_disinfection", None), ("Room102", "door_open", None)],
+    [("Room101", "needs_disinfection", 0.6), ("Room103", "needs_disinfection", 0.5), ("Room101", "occupied", 0.2),
+     ("Room104", "door_open", 0.4)],
+    [("Room102", "is_disinfected", 0.5), ("Room102", "door_open", 0.7)],  # a forAll condition, mapped to HDDL too
+    [("Room103", "is_restocked", 0.8)],  # an achieve condition
+    [("Room101", "is_restocked", None), ("Room101", "needs_disinfection", 0.5), ("Room101", "occupied", 0.3)],
+    # the query negated: the rooms that need no disinfection, so the first world (false) has the most tasks
+    [("Room101", "needs_disinfection", 0.4), "negated"],
+    [("Room103", "needs_disinfection", 0.5), ("Room101", "needs_disinfection", None), ("Room103", "occupied", 0.5),
+     "negated"],
+])
+def test_facts_the_goal_model_reads_against_brute_force(tmp_path, entries):
+    """Which rooms need disinfection (a query reads it) decides which task instances exist: the
+    mission is expanded once per world and compared by content with every world decomposed."""
+    folder = tmp_path / "mission"
+    shutil.copytree(EXAMPLE, folder)
+    hddl, gm, config = mission_files(folder)
+    if entries[-1] == "negated":
+        entries = entries[:-1]
+        gm.write_text(gm.read_text().replace("r.needs_disinfection)", "!r.needs_disinfection)"))
+    world = next((folder / "knowledge").iterdir())
+    brute = BruteForce(hddl, gm, config, world, entries, identity=content)
+    mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries))
+    assert mission.uncertainty.expanded
+    agree_expanded(mission, brute)

@@ -135,11 +135,103 @@ def test_bad_uncertainty_files_are_located(mission, capsys, tmp_path):
         assert status == 2 and message in err, (text, err)
 
 
-def test_what_the_goal_model_reads_is_refused(tmp_path, capsys):
-    u = tmp_path / "u.json"
-    u.write_text(json.dumps({"uncertain": [{"entity": "Room101", "attribute": "is_disinfected", "probability": 0.5}]}))
-    status, _, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(u), "-q")
-    assert status == 2 and "goal G3 reads is_disinfected" in err and f"{u}:1:" in err
+def write_json(path: Path, data: object) -> Path:
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_what_the_goal_model_reads_is_expanded_per_world(tmp_path, capsys):
+    """Whether Room101 needs disinfection (a query reads it) decides its tasks: counted over both
+    worlds, the most likely plan written in the world it assumes, which validate then checks."""
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "needs_disinfection", "probability": 0.3},
+        {"entity": "Room104", "attribute": "door_open", "probability": 0.5}]})
+    status, out, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(u))
+    assert (status, out) == (0, "48\n") and "expanded in 2 worlds of the 1 fact the goal model reads" in err
+    assert run(capsys, "count", str(HOSPITAL), "--uncertain", str(u), "--robust", "-q")[:2] == (0, "0\n")
+    status, out, _ = run(capsys, "explain", str(HOSPITAL), "--uncertain", str(u), "-q")
+    assert status == 0 and "sense first: needs_disinfection(Room101)" in out
+    assert "sensing needs_disinfection(Room101) first raises it to 1 (expected)" in out
+    plan, again = tmp_path / "plan.json", tmp_path / "again.json"
+    for path in (plan, again):
+        assert run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "--most-likely", "-o", str(path),
+                   "-q")[0] == 0
+    assert plan.read_bytes() == again.read_bytes()  # deterministic
+    section = json.loads(plan.read_text())["mission_decomposition_uncertainty"]
+    assert section["world"] == [{"entity": "Room101", "attribute": "needs_disinfection", "value": "False"}]
+    assert section["decompositions"] == [{"robust": "False", "probability": "0.7",
+                                          "needs": ["not needs_disinfection(Room101)"]}]
+    status, _, err = run(capsys, "validate", str(HOSPITAL), str(plan))
+    assert status == 0 and "checked in the world the output was expanded in: Room101.needs_disinfection = False" in err
+    # the plain listing would mix the tasks of two expansions: refused, saying what works
+    status, _, err = run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "-o", str(tmp_path / "x.json"))
+    assert status == 2 and "list the robust ones (--robust) or the most likely (--most-likely)" in err
+    assert not (tmp_path / "x.json").exists()
+    status, _, err = run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "--robust", "-o",
+                         str(tmp_path / "x.json"))
+    assert status == 3 and "whatever the uncertain facts are" in err
+
+
+def test_robust_decompositions_of_every_world_are_listed_in_one(tmp_path, capsys):
+    """Room103 needs no disinfection, so whether it is restocked changes nothing: every world
+    has the same decompositions, all robust, listed in the first world's task ids."""
+    u = write_json(tmp_path / "u.json", {"uncertain": [{"entity": "Room103", "attribute": "is_restocked"}]})
+    out = tmp_path / "robust.json"
+    assert run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "--robust", "-o", str(out), "-q")[0] == 0
+    written = json.loads(out.read_text())
+    assert len(written["mission_decompositions"]) == 36
+    assert all(d["robust"] == "True" for d in written["mission_decomposition_uncertainty"]["decompositions"])
+    assert run(capsys, "validate", str(HOSPITAL), str(out), "-q")[0] == 0
+
+
+def test_what_the_goal_model_reads_is_checked_and_bounded(tmp_path, capsys, monkeypatch):
+    """A record the world does not have, a joint table over both kinds of fact, and more worlds
+    than are expanded: each refused, located, before any expansion."""
+    bad = write_json(tmp_path / "bad.json", {"uncertain": [
+        {"entity": "Room110", "attribute": "needs_disinfection"}]})
+    status, _, err = run(capsys, "check", str(HOSPITAL), "--uncertain", str(bad))
+    assert status == 2 and f"{bad}:1:" in err and "the world has no record Room110 (did you mean" in err
+    mixed = write_json(tmp_path / "mixed.json", {
+        "uncertain": [{"entity": "Room101", "attribute": "needs_disinfection"},
+                      {"entity": "Room104", "attribute": "door_open"}],
+        "joint": [{"facts": [{"entity": "Room101", "attribute": "needs_disinfection"},
+                             {"entity": "Room104", "attribute": "door_open"}],
+                   "outcomes": [{"values": [True, True], "probability": 1.0}]}]})
+    status, _, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(mixed), "-q")
+    assert status == 2 and "a table holds either kind, not both" in err
+    many = write_json(tmp_path / "many.json", {"uncertain": [
+        {"entity": room, "attribute": attribute} for room in ("Room101", "Room102", "Room103")
+        for attribute in ("needs_disinfection", "is_restocked")]})
+    status, _, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(many), "-q")
+    assert status == 2 and "give 64 worlds to expand the mission in, more than the 16" in err
+    assert "goal G2 reads needs_disinfection" in err
+    from mutrose_cp.solve import scenarios
+    monkeypatch.setattr(scenarios, "MAX_PAIRS", 2)  # where the worlds differ, too many pairs: refused, not guessed
+    two = write_json(tmp_path / "two.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "needs_disinfection"}, {"entity": "Room102", "attribute": "door_open"}]})
+    status, _, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(two), "-q")
+    assert status == 2 and "differ in parts of the mission with more than 2 pairs" in err
+
+
+def test_an_output_that_names_another_world(tmp_path, capsys):
+    """validate checks an output in the world its uncertainty section names: a record the world
+    lacks, or a section that is not a list of {entity, attribute, value}, is refused, located."""
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "needs_disinfection", "probability": 0.3}]})
+    plan = tmp_path / "plan.json"
+    assert run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "--most-likely", "-o", str(plan), "-q")[0] == 0
+    data = json.loads(plan.read_text())
+    data["mission_decomposition_uncertainty"]["world"][0]["entity"] = "Room999"
+    forged = write_json(tmp_path / "forged.json", data)
+    status, _, err = run(capsys, "validate", str(HOSPITAL), str(forged))
+    assert status == 2 and "mission_decomposition_uncertainty.world" in err and "no record Room999" in err
+    data["mission_decomposition_uncertainty"]["world"] = {"Room101": "False"}
+    status, _, err = run(capsys, "validate", str(HOSPITAL), str(write_json(tmp_path / "bad.json", data)))
+    assert status == 2 and "mission_decomposition_uncertainty.world: expected a list" in err
+    data["mission_decomposition_uncertainty"]["world"] = [{"entity": "Room101", "attribute": "needs_disinfection",
+                                                           "value": "True"}]  # the other world: not its tasks
+    status, out, _ = run(capsys, "validate", str(HOSPITAL), str(write_json(tmp_path / "other.json", data)), "-q")
+    assert status == 1 and "is missing" in out
 
 
 def test_fifos_missing_files_and_outputs_onto_the_uncertainty_file(mission, capsys, tmp_path):

@@ -20,6 +20,8 @@ from ..output.counts import shown_count
 from ..errors import MissionError, NoDecompositionError, Problem
 from ..interrupt import phase
 from ..mission import Mission
+from ..pipeline.scenarios import world_with
+from ..pipeline.stages import MissionStages
 from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
 from .flow import expanded, load_mission, mission_paths, read_uncertainty, refuse_outputs, report_warnings
 from .process import keep_until_exit
@@ -256,9 +258,16 @@ def cmd_validate(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = mission_paths(args)
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     output = load_decomposition_output(output_path)
+    world: MissionStages = mission
+    if output.assumed_world:  # expanded in one world of uncertain facts the goal model reads
+        world = world_with(mission, {(e, a): v for e, a, v in output.assumed_world},
+                           f"{output_path}: mission_decomposition_uncertainty.world")
+        if not args.quiet:
+            print(f"note: checked in the world the output was expanded in: "
+                  f"{', '.join(f'{e}.{a} = {v}' for e, a, v in output.assumed_world)}", file=sys.stderr)
     progress = _Progress(not args.quiet, "mission decompositions checked")
-    report = validate(mission.domain, mission.goal_model, mission.config, mission.initial_state, output,
-                      world=mission.knowledge, progress=progress)
+    report = validate(world.domain, world.goal_model, world.config, world.initial_state, output,
+                      world=world.knowledge, progress=progress)
     progress.clear()
     for violation in report.violations:
         print(f"{output_path}: {violation}")
@@ -307,18 +316,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
 
     hddl, gm, cfg, folder = mission_paths(args)
     start = time.perf_counter()
-    if args.algorithm == "exploratory":
-        used = ["--" + name for name in cpsat_options(limit=args.limit, sample=args.sample, optimize=args.optimize,
-                                                      explain=args.explain)]
-        if used:
-            raise MissionError(f"{', '.join(used)} {'needs' if len(used) == 1 else 'need'} the CP-SAT decomposer "
-                               "(the default): drop --algorithm exploratory")
-    if args.output == "-" and args.json_summary:
-        raise MissionError("-o - writes the output to standard output: drop --json-summary, which prints there too")
-    if args.sample is not None and (args.optimize or args.limit != DEFAULT_LIMIT):
-        raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
-    if args.most_likely and (args.sample is not None or args.optimize):
-        raise MissionError("--most-likely chooses one decomposition: it cannot be combined with --sample or --optimize")
+    _refuse_decompose_options(args)
     mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet, uncertain=args.uncertain,
                            reads_uncertainty=True, as_written=args.as_written)
     _refuse_uncertainty_options(args, mission)
@@ -333,16 +331,25 @@ def cmd_decompose(args: argparse.Namespace) -> int:
                              folders=(args.ihtn,))
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
     progress = _Progress(not args.quiet, f"mission decompositions: {label}")
-    tg, constraints = expanded(mission)
     request = _request(args)
+    solved: tuple[DecompositionResult, "UncertaintyRecord | None"] | None = None
+    written: MissionStages = mission
+    if mission.uncertainty is not None and mission.uncertainty.expanded:
+        # the goal model reads uncertain facts: the output is the expansion of one world, known
+        # once the decompositions are chosen
+        with phase("solving"):
+            solved, written = _solve_uncertain(args, mission, request)
+    tg, constraints = expanded(written)
     if not tg.tasks() and not args.quiet:
         print("warning: the mission has no task instances (no entity of the world matched its queries): "
               "nothing to decompose", file=sys.stderr)
-    model = OutputModel(tg, constraints, [], mission.domain, mission.config, mission.initial_state)
-    record = None
+    model = OutputModel(tg, constraints, [], written.domain, written.config, written.initial_state)
+
+    def solve() -> tuple[DecompositionResult, "UncertaintyRecord | None"]:
+        return solved if solved is not None else _solve(args, mission, request, progress)
     if args.ihtn:
         with phase("solving"):
-            result, record = _solve(args, mission, request, progress)
+            result, record = solve()
         from ..output.ihtn import refuse_oversized_export, write_ihtns
 
         model.decompositions = list(result.decompositions)
@@ -358,7 +365,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
         # the task entries and constraints may be written by a second process while solving
         with output_while_solving(model, out_path, file_type, args.json_style) as finish:
             with phase("solving"):
-                result, record = _solve(args, mission, request, progress)
+                result, record = solve()
             with phase("writing the output"):
                 listed = result.decompositions if record is None else record.listed(result.decompositions)
                 model.uncertainty = None if record is None else record.section
@@ -370,7 +377,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     data = {
         "command": "decompose",
         "algorithm": args.algorithm,
-        "task_instances": len(mission.expansion.instances),
+        "task_instances": len(written.expansion.instances),
         "task_decompositions": len(tg.decompositions()),
         "constraints": {k: kinds.get(k, 0) for k in ("SEQ", "FB", "EC")},
         "mission_decompositions": str(total),
@@ -390,6 +397,22 @@ def cmd_decompose(args: argparse.Namespace) -> int:
 OUTPUT_SUFFIXES = {".json": "json", ".xml": "xml"}
 
 
+def _refuse_decompose_options(args: argparse.Namespace) -> None:
+    """The options of decompose that cannot go together, refused before anything is read."""
+    if args.algorithm == "exploratory":
+        used = ["--" + name for name in cpsat_options(limit=args.limit, sample=args.sample, optimize=args.optimize,
+                                                      explain=args.explain)]
+        if used:
+            raise MissionError(f"{', '.join(used)} {'needs' if len(used) == 1 else 'need'} the CP-SAT decomposer "
+                               "(the default): drop --algorithm exploratory")
+    if args.output == "-" and args.json_summary:
+        raise MissionError("-o - writes the output to standard output: drop --json-summary, which prints there too")
+    if args.sample is not None and (args.optimize or args.limit != DEFAULT_LIMIT):
+        raise MissionError("--sample lists random decompositions: it cannot be combined with --optimize or --limit")
+    if args.most_likely and (args.sample is not None or args.optimize):
+        raise MissionError("--most-likely chooses one decomposition: it cannot be combined with --sample or --optimize")
+
+
 def _refuse_uncertainty_options(args: argparse.Namespace, mission: Mission) -> None:
     """The options that need an uncertainty file, and the decomposer that does not read one."""
     if mission.uncertainty is None and (args.robust or args.most_likely):
@@ -405,22 +428,39 @@ def _solve(args: argparse.Namespace, mission: Mission, request: DecompositionReq
     """The decompositions the request asks for, and with uncertain facts what each assumes."""
     if mission.uncertainty is None:
         return mission.decompose(request, progress), None
+    return _solve_uncertain(args, mission, request)[0]
+
+
+def _solve_uncertain(args: argparse.Namespace, mission: Mission, request: DecompositionRequest
+                     ) -> tuple[tuple[DecompositionResult, "UncertaintyRecord"], MissionStages]:
+    """The decompositions the request asks for under the uncertain facts, what each assumes, and
+    the mission whose task ids they are in: the world they were chosen in when the goal model
+    reads uncertain facts (``solve/scenarios.py``), else the mission."""
     from ..output.uncertainty_section import UncertaintyRecord
     from ..solve.decompose import answer
-    from ..solve.uncertain import uncertain_space
+    from ..solve.scenarios import ExpandedSpace, decided_space
 
-    uncertain = uncertain_space(mission)
-    space = uncertain.space(robust=args.robust)
-    if space.count == 0:
+    uncertain = decided_space(mission)
+    worlds = uncertain if isinstance(uncertain, ExpandedSpace) else None
+    # the decompositions of several worlds cannot be listed in one output: the robust ones can
+    space = None if worlds is not None and args.most_likely else uncertain.space(robust=args.robust)
+    if (space.count if space is not None else uncertain.count(robust=False)) == 0:
         raise NoDecompositionError("no mission decomposition is valid " + (
             "whatever the uncertain facts are (count --possible counts those valid for some value; explain says "
             "which facts to sense)" if args.robust else "for any value of the uncertain facts"),
             str(mission.goal_model.source))
     if args.most_likely:
         costs = CostModel.read(args.costs) if args.costs else CostModel()
-        chosen, _probability = uncertain.most_likely(costs.decomposition_costs(mission.task_graph))
-        return DecompositionResult(Algorithm.CPSAT, [chosen], space.count, space), UncertaintyRecord(uncertain)
-    return answer(mission, space, request), UncertaintyRecord(uncertain)
+        table = (worlds.content_costs(costs.decomposition_costs) if worlds is not None
+                 else costs.decomposition_costs(mission.task_graph))
+        chosen, _probability = uncertain.most_likely(table)
+        total = space.count if space is not None else uncertain.count(robust=False)
+        result = DecompositionResult(Algorithm.CPSAT, [chosen], total, space)
+    else:
+        assert space is not None
+        result = answer(worlds.output_stages if worlds is not None else mission, space, request)
+    written: MissionStages = worlds.output_stages if worlds is not None else mission
+    return (result, UncertaintyRecord(uncertain)), written
 
 
 def _output_format(args: argparse.Namespace, mission: Mission) -> str:
@@ -468,8 +508,9 @@ def cmd_count(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet, uncertain=args.uncertain,
                            reads_uncertainty=True, as_written=args.as_written)
-    with phase("expanding the mission"):
-        _ = mission.constraints
+    if mission.uncertainty is None or not mission.uncertainty.expanded:  # else expanded per world
+        with phase("expanding the mission"):
+            _ = mission.constraints
     if mission.uncertainty is not None:
         return _count_uncertain(args, mission, start)
     if args.robust or args.possible:
@@ -493,10 +534,11 @@ def cmd_count(args: argparse.Namespace) -> int:
 def _count_uncertain(args: argparse.Namespace, mission: Mission, start: float) -> int:
     """``count`` with uncertain facts: the decompositions valid for some value of them (or, with
     ``--robust``, whatever their values); the summary gives both."""
-    from ..solve.uncertain import uncertain_space
+    from ..solve.scenarios import ExpandedSpace, decided_space
+    from .uncertain import worlds_line
 
     with phase("solving"):
-        space = uncertain_space(mission)
+        space = decided_space(mission)
         robust, possible = space.bounds(robust=True), space.bounds(robust=False)
     keep_until_exit(space)
     low, high = robust if args.robust else possible
@@ -512,6 +554,8 @@ def _count_uncertain(args: argparse.Namespace, mission: Mission, start: float) -
     for c in space.components:
         if c.bounds is not None:
             line += f"\n  bounds, not exact counts: {c.unlisted}"
+    if isinstance(space, ExpandedSpace):
+        line += "\n" + worlds_line(space)
     _summary(args, {"command": "count", "mission_decompositions": str(low) if low == high else f"{low}..{high}",
                     "exact": low == high, "robust": [str(n) for n in robust], "possible": [str(n) for n in possible],
                     "uncertain_facts": facts, "components": len(space.components), "seconds": round(elapsed, 3)},

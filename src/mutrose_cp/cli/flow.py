@@ -18,6 +18,7 @@ from ..mission import Mission
 from ..model.task_graph import TaskGraph
 from ..output.files import refuse_unsafe_outputs
 from ..pipeline.constraints import Constraints
+from ..pipeline.stages import MissionStages
 from .process import keep_until_exit
 
 PathArgument = str | os.PathLike[str]
@@ -82,7 +83,7 @@ def refuse_outputs(outputs: Sequence[PathArgument | None], mission: Mission,
     refuse_unsafe_outputs(outputs, (*inputs, mission.world_path, uncertainty), folders)
 
 
-def expanded(mission: Mission) -> tuple[TaskGraph, Constraints]:
+def expanded(mission: MissionStages) -> tuple[TaskGraph, Constraints]:
     """The mission's Task Graph and constraints, computed now (the phase an interrupt names)."""
     with phase("expanding the mission"):
         return mission.task_graph, mission.constraints

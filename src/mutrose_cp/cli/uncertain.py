@@ -19,30 +19,29 @@ from ..errors import MissionError
 from ..interrupt import phase
 from ..output.counts import shown_count
 from ..output.uncertainty_section import shown_probability
-from ..solve.uncertain import sensing, uncertain_space
+from ..solve.scenarios import ExpandedSpace, decided_space
+from ..solve.uncertain import Sensing, sensing
 from .flow import expanded, load_mission, mission_paths
 from .process import keep_until_exit
 
 ANSWERED, NOTHING_VALID = 0, 3
 
 
-def cmd_explain(args: argparse.Namespace) -> int:
-    hddl, gm, cfg, _folder = mission_paths(args)
-    start = time.perf_counter()
-    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet, uncertain=args.uncertain,
-                           reads_uncertainty=True, as_written=args.as_written)
-    if mission.uncertainty is None:
-        raise MissionError("explain says which uncertain facts to sense: give --uncertain FILE, or name one in the "
-                           "configuration (docs/formats/uncertainty.md); why a mission has no valid decomposition "
-                           "at all: decompose --explain")
-    expanded(mission)
-    with phase("solving"):
-        space = uncertain_space(mission)
-        robust, possible = space.count(robust=True), space.count(robust=False)
-        plan = sensing(space)
-    keep_until_exit(space)
-    lines = [f"{shown_count(possible)} mission decompositions are valid for some value of the "
-             f"{len(mission.uncertainty.facts)} uncertain facts, {shown_count(robust)} whatever their values"]
+def worlds_line(space: ExpandedSpace) -> str:
+    """How many worlds of the facts the goal model reads were expanded, and why a world has no
+    decomposition when the mission cannot be expanded there."""
+    facts = space.uncertainty.expanded
+    line = (f"  expanded in {len(space.worlds)} worlds of the {len(facts)} "
+            f"{'fact' if len(facts) == 1 else 'facts'} the goal model reads")
+    for w in space.worlds:
+        if w.space is None:
+            line += f"\n  no decomposition when {w.world.shown(facts)}: {w.problem}"
+    return line
+
+
+def _sensing_lines(plan: Sensing) -> list[str]:
+    """What to sense first, and what sensing each fact is expected to be worth."""
+    lines = []
     if plan.facts is None:
         lines.append(plan.reason)
     elif not plan.facts:
@@ -57,6 +56,30 @@ def cmd_explain(args: argparse.Namespace) -> int:
             lines.append(f"  sensing {fact.text} first raises it to {shown_probability(expected)} (expected)")
         if not raising:
             lines.append("  no single fact, once sensed, raises it")
+    return lines
+
+
+def cmd_explain(args: argparse.Namespace) -> int:
+    hddl, gm, cfg, _folder = mission_paths(args)
+    start = time.perf_counter()
+    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet, uncertain=args.uncertain,
+                           reads_uncertainty=True, as_written=args.as_written)
+    if mission.uncertainty is None:
+        raise MissionError("explain says which uncertain facts to sense: give --uncertain FILE, or name one in the "
+                           "configuration (docs/formats/uncertainty.md); why a mission has no valid decomposition "
+                           "at all: decompose --explain")
+    if not mission.uncertainty.expanded:  # else expanded once per world
+        expanded(mission)
+    with phase("solving"):
+        space = decided_space(mission)
+        robust, possible = space.count(robust=True), space.count(robust=False)
+        plan = sensing(space)
+    keep_until_exit(space)
+    lines = [f"{shown_count(possible)} mission decompositions are valid for some value of the "
+             f"{len(mission.uncertainty.facts)} uncertain facts, {shown_count(robust)} whatever their values"]
+    lines.extend(_sensing_lines(plan))
+    if isinstance(space, ExpandedSpace):
+        lines.append(worlds_line(space))
     print("\n".join(lines))
     elapsed = time.perf_counter() - start
     if args.json_summary:

@@ -7,6 +7,10 @@ P(true) when it is known, or a number among a few values, each with its probabil
 Facts are independent: the probability of a scenario (one value for every fact) is the product
 of its values' probabilities.
 
+A fact that the goal model reads (a query's condition, a forAll or achieve condition, a
+context) decides which task instances exist: it is *expanded*, the mission expanded once per
+value (``pipeline/scenarios.py``); every other fact is *decided* by the boolean model.
+
 Produced by :mod:`mutrose_cp.io.uncertainty` (the file as written) and
 :mod:`mutrose_cp.pipeline.uncertain_facts` (resolved against the mission).
 """
@@ -52,6 +56,8 @@ class UncertainFact:
     numeric: bool
     values: tuple[Value, ...]
     probabilities: tuple[float, ...] | None  # aligned with ``values``; None when not given
+    # the goal and condition that read it, when the goal model does (then it is expanded)
+    read_by_goal: str = ""
 
     @property
     def text(self) -> str:
@@ -96,3 +102,13 @@ class Uncertainty:
     def with_probabilities(self) -> bool:
         """Whether every fact has probabilities (then every answer has one)."""
         return all(f.probabilities is not None for f in self.facts)
+
+    @property
+    def expanded(self) -> tuple[UncertainFact, ...]:
+        """The facts the goal model reads: one expansion of the mission per scenario of them."""
+        return tuple(f for f in self.facts if f.read_by_goal)
+
+    @property
+    def decided(self) -> tuple[UncertainFact, ...]:
+        """The facts only the domain reads: free variables of the boolean model."""
+        return tuple(f for f in self.facts if not f.read_by_goal)

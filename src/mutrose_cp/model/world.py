@@ -10,9 +10,10 @@ values goal-model variables take while the mission is expanded.
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Collection
+from typing import Collection, Mapping
 
 from lxml import etree
 
@@ -84,6 +85,33 @@ class WorldKnowledge:
                     index.setdefault(t, []).append(pos)
             self._field_indexes[key] = index
         return index
+
+    # -- entities at any depth, and a world with one field changed ------------------------------
+
+    @cached_property
+    def entity_names(self) -> frozenset[str]:
+        """The unique ids of every record of the document, nested ones included."""
+        return frozenset(rid for el in self.root.iter() if isinstance(el.tag, str)
+                         and (rid := record_id(el, self.unique_id)) is not None)
+
+    def entity_record(self, root: etree._Element, entity: str) -> etree._Element | None:
+        """The first record (in document order, at any depth) of ``root`` whose unique id is
+        ``entity``."""
+        return next((el for el in root.iter() if isinstance(el.tag, str) and el is not root
+                     and record_id(el, self.unique_id) == entity), None)
+
+    def with_fields(self, values: Mapping[tuple[str, str], str]) -> "WorldKnowledge":
+        """A copy of this world where each (entity, field) has the text given (the field added
+        to the entity's record when the record has none): the world of one scenario."""
+        root = copy.deepcopy(self.root)
+        for (entity, name), text in values.items():
+            record = self.entity_record(root, entity)
+            assert record is not None, entity  # checked when the uncertainty file was resolved
+            field = child(record, name)
+            if field is None:
+                field = etree.SubElement(record, name)
+            field.text = text
+        return WorldKnowledge(self.source, root, self.unique_id, self.warnings)
 
     # -- per-record helpers --------------------------------------------------------------------
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from typing import Any, Iterable, Iterator
 
+from ..pipeline.scenarios import world_text
+from ..solve.scenarios import ExpandedSpace
 from ..solve.uncertain import Judgement, UncertainSpace
 
 
@@ -57,5 +59,9 @@ class UncertaintyRecord:
                 item["probability"] = scalar(judged.probability)
             item["needs"] = [fact.shown(value) for fact, value in judged.needs]
             decompositions.append(item)
-        return {"uncertain_facts": facts, "possible": scalar(self.space.count(robust=False)),
-                "robust": scalar(self.space.count(robust=True)), "decompositions": decompositions}
+        section = {"uncertain_facts": facts, "possible": scalar(self.space.count(robust=False)),
+                   "robust": scalar(self.space.count(robust=True)), "decompositions": decompositions}
+        if isinstance(self.space, ExpandedSpace):  # the world the tasks section was expanded in
+            section["world"] = [{"entity": f.entry.entity, "attribute": f.entry.attribute, "value": world_text(v)}
+                                for f, v in zip(self.space.uncertainty.expanded, self.space.frame_world.world.values)]
+        return section

@@ -54,15 +54,16 @@ class MissionStages:
             return None
         sorts = build_sorts(self.domain, self.config, self.knowledge)
         return resolve_uncertainty(self.uncertainty_entries, self.uncertainty_source, self.config, sorts,
-                                   self.goal_model, self.uncertainty_joints)
+                                   self.goal_model, self.uncertainty_joints, self.knowledge.entity_names)
 
     @cached_property
     def initial_state(self) -> InitialState:
         """The world's initial state; an uncertain fact's value is left unknown here, for the
-        decomposer to choose (``solve/uncertain.py``)."""
+        decomposer to choose (``solve/uncertain.py``); one the goal model reads is given by the
+        world of each expansion (``pipeline/scenarios.py``)."""
         state = build_initial_state(self.domain, self.config, self.knowledge)
         if self.uncertainty is not None:
-            state = state.forgetting({f.atom for f in self.uncertainty.facts})
+            state = state.forgetting({f.atom for f in self.uncertainty.decided})
         return state
 
     @cached_property

@@ -4,8 +4,9 @@ becomes the ground atom the configuration's semantic mapping reads it as (spec
 certain.
 
 What the goal model reads (queries, contexts, achieve and forAll conditions) decides which task
-instances exist, before any decomposition: an uncertain attribute read there is refused, naming
-the goal and the condition, rather than answered as if the instances were fixed.
+instances exist, before any decomposition: an uncertain attribute read there is *expanded* (the
+mission is expanded once per value, ``pipeline/scenarios.py``).  It need not be mapped to HDDL;
+when it is, the expansion's world gives the domain the same value.
 """
 from __future__ import annotations
 
@@ -20,8 +21,10 @@ from ..model.uncertainty import Joint, JointEntry, UncertainEntry, UncertainFact
 
 def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: Configuration,
                         sorts: dict[str, frozenset[str]], goal_model: GoalModel,
-                        joints: Iterable[JointEntry] = ()) -> Uncertainty:
-    """The uncertain facts of the mission and their joint tables; every problem at once (exit 2)."""
+                        joints: Iterable[JointEntry] = (), entities: frozenset[str] = frozenset()) -> Uncertainty:
+    """The uncertain facts of the mission and their joint tables; every problem at once (exit 2).
+    ``entities``: the names of the world's records (what an attribute the goal model reads may
+    belong to)."""
     problems: list[Problem] = []
     facts: list[UncertainFact] = []
     seen: set[tuple[str, tuple[str, ...]]] = set()
@@ -29,16 +32,10 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
     mappings = _AttributeMappings(config, sorts)
     for entry in entries:
         try:
-            fact = mappings.resolve(entry)
+            fact = _goal_fact(entry, read[entry.attribute], mappings, entities) if entry.attribute in read \
+                else mappings.resolve(entry)
         except MissionError as err:
             problems.extend(err.problems)
-            continue
-        if entry.attribute in read:
-            goal, text = read[entry.attribute]
-            problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute}: goal {goal} reads "
-                                                 f"{entry.attribute} ({text}), so its value decides which task "
-                                                 "instances exist; uncertainty in what the goal model reads is not "
-                                                 "supported: give the attribute's value in the world file"))
             continue
         if fact.atom in seen:
             problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute} is the fact {fact.text}, "
@@ -47,6 +44,12 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
         seen.add(fact.atom)
         facts.append(fact)
     tables = _joints(joints, facts, problems)
+    for table in tables:
+        if len({bool(f.read_by_goal) for f in table.facts}) > 1:
+            expanded = next(f for f in table.facts if f.read_by_goal)
+            problems.append(Problem(table.facts[0].entry.where, f"a joint table links {expanded.text}, which "
+                                    f"{expanded.read_by_goal}, with facts the goal model does not read: a table holds "
+                                    "either kind, not both"))
     if problems:
         raise MissionError(problems)
     # a fact of a joint table has the marginal of the table as its probabilities
@@ -88,6 +91,27 @@ def _joints(joints: Iterable[JointEntry], facts: list[UncertainFact], problems: 
             continue
         tables.append(Joint(tuple(found), j.outcomes))
     return tables
+
+
+def _goal_fact(entry: UncertainEntry, read: tuple[str, str], mappings: "_AttributeMappings",
+               entities: frozenset[str]) -> UncertainFact:
+    """An entry whose attribute the goal model reads: the atom the domain reads it as, when the
+    configuration maps it, else the attribute itself; the entity must be a record of the world."""
+    goal, text = read
+    reader = f"goal {goal} reads {entry.attribute} ({text})"
+    if entry.entity not in entities:
+        guess = closest(entry.entity, sorted(entities))
+        raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: the world has no record "
+                                                f"{entry.entity}" + (f" (did you mean {guess}?)" if guess else "")))
+    if mappings.by_name.get(entry.attribute):
+        try:
+            return replace(mappings.resolve(entry), read_by_goal=reader)
+        except MissionError:
+            pass  # mapped for other types only: the goal model alone reads it of this entity
+    values = entry.values if entry.numeric else (False, True)
+    assert values is not None
+    return UncertainFact(entry, (entry.attribute, (entry.entity,)), entry.numeric, values, entry.probabilities,
+                         read_by_goal=reader)
 
 
 class _AttributeMappings:

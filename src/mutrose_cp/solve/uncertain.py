@@ -253,7 +253,7 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
     """The mission's decompositions with the scenarios that allow each (``stages.uncertainty``
     must be set)."""
     uncertainty = stages.uncertainty
-    assert uncertainty is not None
+    assert uncertainty is not None and not uncertainty.expanded  # those: solve/scenarios.py
     tg = stages.task_graph
     if tg.unique_branch:
         raise MissionError("the mission is unique-branch (spec semantics.md section 7.7), whose validity the "

@@ -225,6 +225,9 @@ def _actions(value: Any) -> tuple[tuple[str, Capabilities], ...] | None:
     return tuple(out)
 
 
+UNCERTAINTY = "mission_decomposition_uncertainty"
+
+
 def _section(doc: dict[str, Any], key: str, source: str) -> list[Any]:
     items = as_list(doc[key])
     if items is None:
@@ -249,4 +252,22 @@ def read_json(text: str, source: str) -> DecompositionOutput:
     if not isinstance(listing, tuple):  # "" or an object: not read as it was decoded
         listing = tuple(decomposition_keys(md, i, source) for i, md in enumerate(_section(doc, LISTING, source)))
     return DecompositionOutput(source, tasks, constraints, listing, "json",
-                               _actions(doc["actions"]) if "actions" in doc else None)
+                               _actions(doc["actions"]) if "actions" in doc else None, _assumed_world(doc, source))
+
+
+def _assumed_world(doc: dict[str, Any], source: str) -> tuple[tuple[str, str, str], ...]:
+    """The world an output's tasks were expanded in, from its uncertainty section's ``world``
+    (docs/formats/output.md): each entity's attribute and the value it was given."""
+    section = doc.get(UNCERTAINTY)
+    if not isinstance(section, dict) or "world" not in section:
+        return ()
+    items = section["world"]
+    where = f"{source}: {UNCERTAINTY}.world"
+    if not isinstance(items, list):
+        raise MissionError(Problem(where, "expected a list of {entity, attribute, value}"))
+    found = []
+    for i, item in enumerate(items):
+        if not isinstance(item, dict) or not all(isinstance(item.get(k), str) for k in ("entity", "attribute", "value")):
+            raise MissionError(Problem(f"{where}[{i}]", "expected an object with strings entity, attribute and value"))
+        found.append((item["entity"], item["attribute"], item["value"]))
+    return tuple(found)

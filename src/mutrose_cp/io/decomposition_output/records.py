@@ -101,3 +101,6 @@ class DecompositionOutput:
     format: str = "json"  # "json" | "xml": which layout rules the fields follow
     # the ``actions`` section: (name, capabilities as written); None when there is no list of actions
     actions: tuple[tuple[str, Capabilities], ...] | None = None
+    # (entity, attribute, value text) of the world the tasks were expanded in, when the goal model
+    # reads uncertain facts (``mission_decomposition_uncertainty.world``); empty: the world as written
+    assumed_world: tuple[tuple[str, str, str], ...] = ()

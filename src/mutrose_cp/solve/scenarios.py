@@ -1,0 +1,295 @@
+"""Decompositions when the goal model reads uncertain facts: one expansion per world, and what
+the worlds share (docs/formats/uncertainty.md).
+
+Each world of ``pipeline/scenarios.py`` is decided as any mission with uncertain facts
+(:func:`mutrose_cp.solve.uncertain.uncertain_space`).  Across worlds a decomposition is known by
+its content, not by its task ids (a world where a room needs no disinfection numbers the
+others' tasks differently): a task decomposition is the goal-model task, the HDDL task, its
+location and variable values, and the method path chosen, the n-th of equal ones in a world.
+
+Most of a mission is the same in every world: its components are equal, content for content,
+with the same alternatives allowed in the same scenarios of the facts they read.  Those are
+*shared*, decided once.  The rest, where the worlds differ, is gathered into one component over
+the facts the goal model reads and the uncertain facts of those parts: its alternatives are the
+content of the differing parts in each world, each allowed in the scenarios (the world's values,
+and the values of the other facts that allow it there) where it is valid.  Then every answer of
+an uncertain space holds as it is: robust when every scenario allows each part, possible when
+some does, the probability a sum over scenarios, products across components, and the facts to
+sense first, now among the facts the goal model reads as well.
+
+Decompositions are written in the task ids of one world, the *frame*: a robust decomposition
+exists in every world; the most likely one in the likeliest world where it is valid.  The
+possible decompositions of different worlds cannot be listed in one output, so only counted.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable, Hashable, Iterable, Mapping
+
+from ..errors import MissionError
+from ..model.task_graph import TaskGraph
+from ..model.uncertainty import UncertainFact, Uncertainty, Value
+from ..pipeline.scenarios import ScenarioWorld, scenario_worlds
+from ..pipeline.stages import MissionStages
+from .cpsat import Component, DecompositionSpace
+from .uncertain import MAX_PAIRS, Part, Scenario, UncertainComponent, UncertainSpace, uncertain_space
+
+ComponentKey = tuple[Hashable, ...]
+
+
+def decided_space(stages: MissionStages) -> UncertainSpace:
+    """The mission's decompositions under its uncertain facts: expanded per world when the goal
+    model reads some of them (:class:`ExpandedSpace`), else decided in one expansion."""
+    uncertainty = stages.uncertainty
+    assert uncertainty is not None
+    return expanded_space(stages) if uncertainty.expanded else uncertain_space(stages)
+
+
+@dataclass
+class WorldSpace:
+    """One world, decided: its space (None when the mission cannot be expanded there, with
+    ``problem`` saying why) and each task decomposition's content id."""
+
+    world: ScenarioWorld
+    space: UncertainSpace | None
+    problem: str = ""
+    content: dict[int, int] = field(default_factory=dict)  # decomposition vertex -> content id
+
+    @property
+    def stages(self) -> MissionStages:
+        return self.world.stages
+
+    @cached_property
+    def vertex_of(self) -> dict[int, int]:
+        return {c: d for d, c in self.content.items()}
+
+    @property
+    def live(self) -> bool:
+        """Whether some decomposition is valid here for some value of the other facts."""
+        return self.space is not None and all(c.allowed for c in self.space.components)
+
+
+@dataclass
+class ExpandedSpace(UncertainSpace):
+    """An uncertain space whose parts are content ids, over every world (module docstring).
+    ``frame``: the world whose task ids the decompositions handed out and judged are in."""
+
+    worlds: list[WorldSpace] = field(default_factory=list)
+    frame: int = 0
+
+    @property
+    def frame_world(self) -> WorldSpace:
+        return self.worlds[self.frame]
+
+    @property
+    def output_stages(self) -> MissionStages:
+        """The mission in the frame world: what an output of its decompositions is written from."""
+        return self.frame_world.stages
+
+    @cached_property
+    def fixed(self) -> list[int]:
+        return []  # every world's fixed choices are parts of the components here
+
+    @cached_property
+    def component_of(self) -> dict[int, int]:
+        """Content id -> the index of its component in :attr:`components`."""
+        return {d: i for i, c in enumerate(self.components) for part in c.allowed for d in part}
+
+    def bounds(self, robust: bool) -> tuple[int, int]:
+        counted = [c.counted(robust) for c in self.components]
+        return math.prod(low for low, _ in counted), math.prod(high for _, high in counted)
+
+    def parts(self, decomposition: Iterable[int]) -> list[Part]:
+        """``decomposition`` (task ids of the frame world)'s part in each component."""
+        content = self.frame_world.content
+        return super().parts(content[d] for d in decomposition)
+
+    def space(self, robust: bool) -> DecompositionSpace:
+        """The robust decompositions in the frame world, for listing as any space; the possible
+        ones of several worlds have no common task ids, and are refused."""
+        if not robust:
+            raise MissionError("the goal model reads uncertain facts, so the decompositions valid for some value of "
+                               "them belong to different expansions of the mission, which one output cannot hold: "
+                               "list the robust ones (--robust) or the most likely (--most-likely), or count them")
+        self.require_listed()
+        frame = self.frame_world
+        assert frame.space is not None
+        enc = frame.space.encoding
+        dec_to_var = {d: v for v, d in frame.space.var_to_dec.items()}
+        fixed = set(frame.space.fixed)
+        components = []
+        for c in self.components:
+            parts = [p for p in c.allowed if c.robust(p)]
+            if not parts:
+                components.append(Component([], [], solutions=[], count=0))
+                continue
+            solutions = sorted({frozenset(dec_to_var[frame.vertex_of[d]] for d in p
+                                          if frame.vertex_of[d] not in fixed) for p in parts}, key=sorted)
+            choice_vars = sorted({v for s in solutions for v in s})
+            if choice_vars:
+                components.append(Component([], choice_vars, solutions=solutions, count=len(solutions)))
+        return DecompositionSpace(enc, components, frame.space.var_to_dec)
+
+    def content_costs(self, costs_of: Callable[[TaskGraph], Mapping[int, int]]) -> dict[int, int]:
+        """Each content id's cost, from the cost of its task decomposition in a world."""
+        costs: dict[int, int] = {}
+        for w in self.worlds:
+            if w.space is not None:
+                for d, cost in costs_of(w.stages.task_graph).items():
+                    if d in w.content:
+                        costs.setdefault(w.content[d], cost)
+        return costs
+
+    def most_likely(self, costs: Mapping[int, int]) -> tuple[list[int], float]:
+        """The decomposition most likely to be valid (``costs`` by content id, see
+        :meth:`content_costs`), in the task ids of the likeliest world where it is valid, which
+        becomes the frame."""
+        self.require_listed()
+        if not self.uncertainty.with_probabilities:
+            missing = next(f for f in self.uncertainty.facts if f.probabilities is None)
+            raise MissionError(f"the most likely decomposition needs every fact's probabilities, and "
+                               f"{missing.entry.entity}.{missing.entry.attribute} ({missing.text}) has none "
+                               f"({missing.entry.where})")
+        chosen: list[int] = []
+        probability = 1.0
+        best: Part = ()
+        for c in self.components:
+            if not c.allowed:
+                raise MissionError("no decomposition is valid in any scenario")
+
+            def likelier(p: Part, c: UncertainComponent = c) -> tuple[float, int]:
+                return -(c.probability(p) or 0.0), sum(costs.get(d, 0) for d in p)
+            best = min(c.allowed, key=likelier)  # the first of the listing order among equals
+            chosen.extend(best)
+            probability *= c.probability(best) or 0.0
+        varying = self.components[-1]  # the last: where the worlds differ (``best`` is its part)
+        expanded = len(self.uncertainty.expanded)
+        weight = {i: math.fsum(varying.scenario_probability(s) for s in varying.allowed[best]
+                               if s[:expanded] == w.world.values)
+                  for i, w in enumerate(self.worlds) if w.live}
+        self.frame = max(weight, key=lambda i: (weight[i], -i))
+        vertex_of = self.frame_world.vertex_of
+        return sorted(vertex_of[d] for d in chosen), probability
+
+
+def expanded_space(stages: MissionStages) -> ExpandedSpace:
+    """Every world decided, the components they share found, the rest gathered into one."""
+    uncertainty = stages.uncertainty
+    assert uncertainty is not None
+    contents: dict[Hashable, int] = {}
+    worlds = [_decided_world(w, contents) for w in scenario_worlds(stages)]
+    for w in worlds:
+        if w.space is not None:
+            w.space.require_listed()
+    live = [w for w in worlds if w.live]
+    if not any(w.space is not None for w in worlds):
+        raise MissionError(f"the mission cannot be expanded in any world of its uncertain facts: {worlds[0].problem}")
+    keyed = {id(w): _keyed_components(w) for w in live}
+    shared = Counter(key for key, _ in keyed[id(live[0])]) if live else Counter()
+    for w in live[1:]:
+        shared &= Counter(key for key, _ in keyed[id(w)])
+    common: list[UncertainComponent] = []
+    differing: dict[int, list[UncertainComponent]] = {}
+    for n, w in enumerate(live):
+        left = Counter(shared)
+        differing[id(w)] = []
+        for key, comp in keyed[id(w)]:
+            if left[key] > 0:
+                left[key] -= 1
+                if n == 0:
+                    common.append(comp)
+            else:
+                differing[id(w)].append(comp)
+    varying = _varying(uncertainty, live, differing, len(common))
+    frame = next((i for i, w in enumerate(worlds) if w.live), next(i for i, w in enumerate(worlds) if w.space))
+    base = worlds[frame].space
+    assert base is not None
+    return ExpandedSpace(base.encoding, uncertainty, [*common, varying], base.var_to_dec, worlds=worlds, frame=frame)
+
+
+def _decided_world(world: ScenarioWorld, contents: dict[Hashable, int]) -> WorldSpace:
+    """One world's uncertain space, and its task decompositions' content ids."""
+    try:
+        tg = world.stages.task_graph
+    except MissionError as err:
+        return WorldSpace(world, None, "; ".join(p.message for p in err.problems))
+    if not tg.tasks():
+        return WorldSpace(world, None, "no entity of the world matched the queries: the mission has no task")
+    space = uncertain_space(world.stages)
+    return WorldSpace(world, space, "", _content_ids(tg, contents))
+
+
+def _content_ids(tg: TaskGraph, contents: dict[Hashable, int]) -> dict[int, int]:
+    """Each task decomposition's id by content, shared by every world: its goal-model task, HDDL
+    task, location, variable values and method path, and which of equal ones it is."""
+    seen: Counter[Hashable] = Counter()
+    ids = {}
+    for vertex in tg.decompositions():
+        d = vertex.decomposition
+        inst = d.instance
+        key: Hashable = (inst.gm_task, inst.name, inst.location, inst.parameters, d.number)
+        seen[key] += 1
+        ids[vertex.index] = contents.setdefault((key, seen[key]), len(contents))
+    return ids
+
+
+def _keyed_components(w: WorldSpace) -> list[tuple[ComponentKey, UncertainComponent]]:
+    """The world's components with content ids for parts, each with a key equal for components
+    that are the same in two worlds: the facts they read and each alternative's scenarios.  The
+    decompositions chosen in every solution are one more component, of one alternative."""
+    assert w.space is not None
+    fixed = tuple(sorted(w.content[d] for d in w.space.fixed))
+    found: list[tuple[ComponentKey, UncertainComponent]] = [
+        (("fixed", fixed), UncertainComponent(-1, (), {fixed: frozenset({()})}))]
+    for c in w.space.components:
+        allowed = {tuple(sorted(w.content[d] for d in part)): scenarios for part, scenarios in c.allowed.items()}
+        key = (tuple(f.atom for f in c.facts), frozenset(allowed.items()))
+        found.append((key, UncertainComponent(c.number, c.facts, allowed, joints=c.joints)))
+    return found
+
+
+def _varying(uncertainty: Uncertainty, live: list[WorldSpace], differing: dict[int, list[UncertainComponent]],
+             number: int) -> UncertainComponent:
+    """The parts where the worlds differ, as one component over the facts the goal model reads
+    and the other facts those parts read: an alternative per world and combination of the
+    differing components' alternatives, allowed in that world's scenarios."""
+    order = {f.atom: i for i, f in enumerate(uncertainty.facts)}
+    read = {f for comps in differing.values() for c in comps for f in c.facts}
+    facts: tuple[UncertainFact, ...] = (*uncertainty.expanded, *sorted(read, key=lambda f: order[f.atom]))
+    index = {f.atom: i for i, f in enumerate(facts)}
+    joints = tuple(j for j in uncertainty.joints if any(f.atom in index for f in j.facts))
+    component = UncertainComponent(number, facts, {}, joints=joints)
+    allowed: dict[Part, set[Scenario]] = {}
+    pairs = 0
+    expanded = len(uncertainty.expanded)
+    for w in live:
+        comps = differing[id(w)]
+        free = [i for i, f in enumerate(facts[expanded:], expanded) if not any(f in c.facts for c in comps)]
+        for choice in itertools.product(*(list(c.allowed.items()) for c in comps)):
+            part = tuple(sorted(d for p, _ in choice for d in p))
+            for scenarios in itertools.product(*(s for _, s in choice)):
+                for others in itertools.product(*(facts[i].values for i in free)):
+                    values: list[Value] = [*w.world.values, *([False] * (len(facts) - expanded))]
+                    for c, scenario in zip(comps, scenarios):
+                        for f, v in zip(c.facts, scenario):
+                            values[index[f.atom]] = v
+                    for i, v in zip(free, others):
+                        values[i] = v
+                    if component.can_happen(tuple(values)):
+                        allowed.setdefault(part, set()).add(tuple(values))
+                    pairs += 1
+                if pairs > MAX_PAIRS:
+                    raise MissionError(f"the worlds of the {expanded} uncertain facts the goal model reads differ in "
+                                       f"parts of the mission with more than {MAX_PAIRS} pairs of an alternative and a "
+                                       f"scenario ({', '.join(f.text for f in facts[:4])}"
+                                       f"{', ...' if len(facts) > 4 else ''}): give some of their values in the world "
+                                       "file")
+    component.allowed = dict(sorted(((p, frozenset(s)) for p, s in allowed.items()), key=lambda item: item[0]))
+    return component
+
+
+__all__ = ["ExpandedSpace", "WorldSpace", "decided_space", "expanded_space"]
