@@ -456,3 +456,37 @@ def test_facts_the_goal_model_reads_against_brute_force(tmp_path, entries):
     mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries))
     assert mission.uncertainty.expanded
     agree_expanded(mission, brute)
+
+
+@settings(max_examples=max(EXAMPLES // 2, 5), deadline=None, suppress_health_check=list(HealthCheck))
+@given(uncertain_missions())
+def test_generated_missions_whose_goal_model_reads_uncertain_facts(tmp_path_factory, case):
+    """1-3 room attributes the generated goal model reads (which rooms are active, a forAll or
+    context condition) and up to 3 it does not, against every world decomposed by content."""
+    spec, rnd = case
+    folder = tmp_path_factory.mktemp("mission")
+    hddl, gm, config = spec.write(folder)
+    world = folder / "knowledge" / "world_db.xml"
+    mission = Mission.load(hddl, gm, config)
+    assume(mission.task_graph.tasks() and not mission.task_graph.unique_branch
+           and mission.decomposition_space().count <= 300)
+    read = dict(goal_model_reads(mission.goal_model))
+    rooms = sorted(mission.initial_state.sorts.get("room", ()))
+    records = {el.findtext("name"): el for el in etree.parse(str(world)).getroot().iter() if el.findtext("name")}
+    boolean = {"true", "false"}
+    goal = [(r, a) for r in rooms for a in sorted(read)
+            if (records[r].findtext(a) or "true").strip().lower() in boolean]
+    domain = [(r, m.name) for r in rooms for m in mission.config.semantic_mapping
+              if m.type == "attribute" and m.mapped_type == "predicate" and m.name not in read and m.relates_to == "Room"]
+    assume(goal)
+    with_probabilities = rnd.random() < 0.7
+    chosen = rnd.sample(goal, min(len(goal), rnd.randint(1, 3))) + rnd.sample(domain, min(len(domain), rnd.randint(0, 3)))
+    entries = [(r, a, rnd.choice([0.2, 0.5, 0.7]) if with_probabilities else None) for r, a in chosen]
+    brute = BruteForce(hddl, gm, config, world, entries, identity=content)
+    try:
+        mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(folder / "u.json", entries))
+        assert mission.uncertainty.expanded
+        agree_expanded(mission, brute)
+    except MissionError as refused:  # what is read straight from the world, in some world
+        assert "unique-branch" in str(refused) or "read by a recursive method" in str(refused), str(refused)
+

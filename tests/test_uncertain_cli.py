@@ -202,9 +202,10 @@ def test_what_the_goal_model_reads_is_checked_and_bounded(tmp_path, capsys, monk
     many = write_json(tmp_path / "many.json", {"uncertain": [
         {"entity": room, "attribute": attribute} for room in ("Room101", "Room102", "Room103")
         for attribute in ("needs_disinfection", "is_restocked")]})
-    status, _, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(many), "-q")
-    assert status == 2 and "give 64 worlds to expand the mission in, more than the 16" in err
-    assert "goal G2 reads needs_disinfection" in err
+    for command in ("count", "check"):
+        status, _, err = run(capsys, command, str(HOSPITAL), "--uncertain", str(many), "-q")
+        assert status == 2 and "give 64 worlds to expand the mission in, more than the 16" in err, command
+        assert "goal G2 reads needs_disinfection" in err and f"{many}:1:" in err
     from mutrose_cp.solve import scenarios
     monkeypatch.setattr(scenarios, "MAX_PAIRS", 2)  # where the worlds differ, too many pairs: refused, not guessed
     two = write_json(tmp_path / "two.json", {"uncertain": [

@@ -20,7 +20,7 @@ from ..output.counts import shown_count
 from ..errors import MissionError, NoDecompositionError, Problem
 from ..interrupt import phase
 from ..mission import Mission
-from ..pipeline.scenarios import world_with
+from ..pipeline.scenarios import world_scenarios, world_with
 from ..pipeline.stages import MissionStages
 from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
 from .flow import expanded, load_mission, mission_paths, read_uncertainty, refuse_outputs, report_warnings
@@ -92,6 +92,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     read_uncertainty(mission, args.uncertain, args.as_written)
+    if mission.uncertainty is not None and mission.uncertainty.expanded:
+        world_scenarios(mission.uncertainty)  # more worlds than are expanded: refused here too
     base = (folder if folder is not None else cfg.parent.parent).resolve()
     written = (base / mission.config.output.file_path).resolve()
     if base != written and base not in written.parents:

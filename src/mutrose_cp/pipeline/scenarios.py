@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 from typing import Mapping
 
 from ..errors import MissionError
-from ..model.uncertainty import UncertainFact, Value
+from ..model.uncertainty import UncertainFact, Uncertainty, Value
 from .stages import MissionStages
 
 #: at most this many expansions of the mission, one per scenario of the facts the goal model reads
@@ -40,11 +40,10 @@ class ScenarioWorld:
         return ", ".join(f.shown(v) for f, v in zip(facts, self.values))
 
 
-def scenario_worlds(stages: MissionStages) -> list[ScenarioWorld]:
-    """The worlds of ``stages``' uncertain facts that the goal model reads, in scenario order
-    (each fact's values in its order: false first), those of probability 0 left out."""
-    uncertainty = stages.uncertainty
-    assert uncertainty is not None and uncertainty.expanded
+def world_scenarios(uncertainty: Uncertainty) -> list[tuple[Value, ...]]:
+    """The scenarios of the facts the goal model reads, one per world to expand the mission in
+    (each fact's values in its order: false first), those of probability 0 left out; more than
+    ``MAX_WORLDS`` are refused, naming the goals and the facts."""
     facts = uncertainty.expanded
     joints = [j for j in uncertainty.joints if j.facts[0].read_by_goal]
     known = all(f.probabilities is not None for f in facts)
@@ -61,6 +60,15 @@ def scenario_worlds(stages: MissionStages) -> list[ScenarioWorld]:
         raise MissionError(f"{len(facts)} uncertain facts that the goal model reads give {len(scenarios)} worlds to "
                            f"expand the mission in, more than the {MAX_WORLDS} that are ({named}): give some of "
                            "their values in the world file", facts[0].entry.where)
+    return scenarios
+
+
+def scenario_worlds(stages: MissionStages) -> list[ScenarioWorld]:
+    """The worlds of ``stages``' uncertain facts that the goal model reads (:func:`world_scenarios`)."""
+    uncertainty = stages.uncertainty
+    assert uncertainty is not None and uncertainty.expanded
+    facts = uncertainty.expanded
+    scenarios = world_scenarios(uncertainty)
     expanded = {f.entry for f in facts}
     decided = tuple(e for e in stages.uncertainty_entries or () if e not in expanded)
     decided_joints = tuple(j for j in stages.uncertainty_joints
