@@ -6,12 +6,18 @@ the meal (``Patient<i>.can_fetch``, true with probability 0.9), at n = 100, 1000
 ``count --robust``, ``count --possible``, ``decompose --most-likely`` (its output written) and
 ``explain``; and the bundled example examples/medication-round.
 
+Facts the goal model reads expand the mission once per world: the vital-signs family (n rooms
+of two patients) with whether Room0 and Room1 are occupied uncertain (the query of the rooms to
+visit reads it: 4 worlds) and whether each patient is available (2n facts the domain reads), at
+n = 100 and 1000; and examples/medication-round with knowledge/uncertain-orders.json (whether
+Room204's dose is due: 2 worlds).
+
 Each run is ``python -m mutrose_cp ... -q``, measured by the parent as the other benchmarks are
 (wall time and peak memory, ``benchmarks/run.py:measure``), with the package's bytecode
 compiled first.  Results go to ``benchmarks/results/uncertain.json``; the table is printed as
 Markdown for docs/benchmarks.md.
 
-    python benchmarks/uncertain.py           # every size (about a minute)
+    python benchmarks/uncertain.py           # every size (about two minutes)
     python benchmarks/uncertain.py --quick   # n = 100 and the example
 """
 from __future__ import annotations
@@ -38,6 +44,16 @@ def uncertainty(n: int, path: Path) -> Path:
     return path
 
 
+def occupancy(n: int, path: Path) -> Path:
+    """Room0 and Room1 occupied or not (read by the goal model's query), and every patient
+    available or not (read by the domain)."""
+    rooms = [{"entity": "Room0", "attribute": "is_occupied", "probability": 0.7},
+             {"entity": "Room1", "attribute": "is_occupied", "probability": 0.5}]
+    patients = [{"entity": f"Patient{i}", "attribute": "available", "probability": 0.9} for i in range(1, 2 * n + 1)]
+    path.write_text(json.dumps({"uncertain": rooms + patients}))
+    return path
+
+
 def run(inputs: list[str], name: str, work: Path) -> dict:
     argv = COMMANDS[name]
     out = ["-o", str(work / "plan.json")] if argv[0] == "decompose" else []
@@ -58,6 +74,17 @@ def main(argv: list[str] | None = None) -> int:
                 rows.append({"mission": f"delivery n={n}", "uncertain_facts": n, **run(inputs, name, work)})
         for name in COMMANDS:
             rows.append({"mission": "examples/medication-round", "uncertain_facts": 2, **run([str(EXAMPLE)], name, work)})
+        for n in ([100] if quick else [100, 1000]):
+            hddl, gm, cfg = generate("vital-signs", n, work / f"vital-signs-{n}")
+            facts = occupancy(n, work / f"vital-signs-{n}" / "uncertain.json")
+            for name in COMMANDS:
+                inputs = [str(hddl), str(gm), str(cfg), "--uncertain", str(facts)]
+                rows.append({"mission": f"vital signs n={n}, 4 worlds", "uncertain_facts": 2 + 2 * n,
+                             **run(inputs, name, work)})
+        orders = EXAMPLE / "knowledge" / "uncertain-orders.json"
+        for name in COMMANDS:
+            rows.append({"mission": "examples/medication-round, 2 worlds", "uncertain_facts": 3,
+                         **run([str(EXAMPLE), "--uncertain", str(orders)], name, work)})
     out = ROOT / "benchmarks" / "results" / ("uncertain-quick.json" if quick else "uncertain.json")
     out.write_text(json.dumps(rows, indent=1) + "\n")
     print("| mission | uncertain facts | command | status | time | peak memory |\n|---|---|---|---|---|---|")

@@ -309,3 +309,17 @@ def test_an_uncertainty_file_over_the_input_limit_is_refused(mission, capsys, tm
     big.write_text(json.dumps({"uncertain": [{"entity": "Room202", "attribute": "door_locked"}], "pad": "x" * 2_000_000}))
     status, _, err = run(capsys, "count", str(mission), "--uncertain", str(big), "--max-input-mb", "1", "-q")
     assert status == 2 and "over the input limit of 1 MB" in err
+
+
+def test_the_example_with_a_fact_the_goal_model_reads(mission, capsys, tmp_path):
+    """What docs/guide.md and examples/README.md show of knowledge/uncertain-orders.json."""
+    orders = str(mission / "knowledge" / "uncertain-orders.json")
+    assert run(capsys, "count", str(mission), "--uncertain", orders, "-q")[:2] == (0, "8\n")
+    status, out, _ = run(capsys, "explain", str(mission), "--uncertain", orders, "-q")
+    assert status == 0 and "most likely decomposition now: valid with probability 0.312" in out
+    assert "sensing patient-present(Room203) first raises it to 0.52" in out
+    assert "sensing dose_due(Room204) first raises it to 0.48" in out
+    plan = tmp_path / "plan.json"
+    assert run(capsys, "decompose", str(mission), "--uncertain", orders, "--most-likely", "-o", str(plan), "-q")[0] == 0
+    status, _, err = run(capsys, "validate", str(mission), str(plan))
+    assert status == 0 and "Room204.dose_due = False" in err
