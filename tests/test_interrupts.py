@@ -105,3 +105,20 @@ def test_interrupt_inside_a_write_removes_the_temporary_file(tmp_path):
             raise Interrupted(signal.SIGTERM, "writing the output")
     assert out.read_text() == SENTINEL
     assert _leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize("sig", ["INT", "TERM"])
+def test_interrupted_while_expanding_the_worlds(tmp_path, sig):
+    """Facts the goal model reads: the worlds are expanded while solving; stopped there, nothing
+    is written and no count is printed."""
+    hospital = EXAMPLE.parent / "hospital-disinfection"
+    uncertain = tmp_path / "u.json"
+    uncertain.write_text('{"uncertain": [{"entity": "Room101", "attribute": "needs_disinfection", "probability": 0.3}]}')
+    out = tmp_path / "plan.json"
+    out.write_text(SENTINEL)
+    for command in (["decompose", "--most-likely", "-o", str(out)], ["count"]):
+        result = _run([command[0], str(hospital), "--uncertain", str(uncertain), *command[1:]], f"solving:{sig}:0",
+                      tmp_path)
+        assert result.returncode == 128 + signal.Signals["SIG" + sig], result.stderr
+        assert "interrupted while solving" in result.stderr and "Traceback" not in result.stderr
+        assert result.stdout == "" and out.read_text() == SENTINEL and _leftovers(tmp_path) == []

@@ -149,6 +149,8 @@ def test_what_the_goal_model_reads_is_expanded_per_world(tmp_path, capsys):
     status, out, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(u))
     assert (status, out) == (0, "48\n") and "expanded in 2 worlds of the 1 fact the goal model reads" in err
     assert run(capsys, "count", str(HOSPITAL), "--uncertain", str(u), "--robust", "-q")[:2] == (0, "0\n")
+    summary = json.loads(run(capsys, "count", str(HOSPITAL), "--uncertain", str(u), "--json-summary")[1].splitlines()[0])
+    assert summary["worlds"] == 2 and summary["possible"] == ["48", "48"]
     status, out, _ = run(capsys, "explain", str(HOSPITAL), "--uncertain", str(u), "-q")
     assert status == 0 and "sense first: needs_disinfection(Room101)" in out
     assert "sensing needs_disinfection(Room101) first raises it to 1 (expected)" in out
@@ -163,6 +165,10 @@ def test_what_the_goal_model_reads_is_expanded_per_world(tmp_path, capsys):
                                           "needs": ["not needs_disinfection(Room101)"]}]
     status, _, err = run(capsys, "validate", str(HOSPITAL), str(plan))
     assert status == 0 and "checked in the world the output was expanded in: Room101.needs_disinfection = False" in err
+    drawn = tmp_path / "plan.dot"
+    assert run(capsys, "graph", str(HOSPITAL), "--view", "decomposition", "--from-output", str(plan), "-o", str(drawn),
+               "-q")[0] == 0
+    assert "Room102" in drawn.read_text() and "Room101" not in drawn.read_text()  # drawn in its world
     # the plain listing would mix the tasks of two expansions: refused, saying what works
     status, _, err = run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "-o", str(tmp_path / "x.json"))
     assert status == 2 and "list the robust ones (--robust) or the most likely (--most-likely)" in err

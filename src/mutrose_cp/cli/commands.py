@@ -491,11 +491,12 @@ def cmd_graph(args: argparse.Namespace) -> int:
     mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
     refuse_outputs(render_targets(args.output), mission, (hddl, gm, cfg, *([args.from_output] if args.from_output else [])))
     chosen = None
+    drawn: MissionStages = mission
     if args.from_output:
         from ..validate.listed import listed_decomposition
 
-        chosen = listed_decomposition(mission, args.from_output, args.index)
-    result = render(view_dot(mission, args.view, args.index, chosen=chosen, source=args.from_output or ""), args.output)
+        drawn, chosen = listed_decomposition(mission, args.from_output, args.index)
+    result = render(view_dot(drawn, args.view, args.index, chosen=chosen, source=args.from_output or ""), args.output)
     if result.message:
         print(result.message, file=sys.stderr)
     elapsed = time.perf_counter() - start
@@ -560,7 +561,8 @@ def _count_uncertain(args: argparse.Namespace, mission: Mission, start: float) -
         line += "\n" + worlds_line(space)
     _summary(args, {"command": "count", "mission_decompositions": str(low) if low == high else f"{low}..{high}",
                     "exact": low == high, "robust": [str(n) for n in robust], "possible": [str(n) for n in possible],
-                    "uncertain_facts": facts, "components": len(space.components), "seconds": round(elapsed, 3)},
+                    "uncertain_facts": facts, "components": len(space.components), "seconds": round(elapsed, 3),
+                    **({"worlds": len(space.worlds)} if isinstance(space, ExpandedSpace) else {})},
              line, mission)
     sys.stderr.flush()
     print(low if low == high else f"{low}..{high}")  # the bare count, or its bounds, is the last line

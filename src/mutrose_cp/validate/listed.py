@@ -9,13 +9,19 @@ from __future__ import annotations
 
 from ..errors import MissionError, Problem
 from ..io.decomposition_output import load_decomposition_output
+from ..pipeline.scenarios import world_with
 from ..pipeline.stages import MissionStages
 from ..solve import decomposers
 
 
-def listed_decomposition(mission: MissionStages, path: str, index: int = 0) -> list[int]:
-    """The decomposition vertices of mission decomposition ``index`` (0-based) listed in ``path``."""
+def listed_decomposition(mission: MissionStages, path: str, index: int = 0) -> tuple[MissionStages, list[int]]:
+    """The decomposition vertices of mission decomposition ``index`` (0-based) listed in ``path``,
+    and the mission they are of: ``mission``, or ``mission`` in the world the file says its
+    tasks were expanded in (docs/formats/output.md, ``mission_decomposition_uncertainty``)."""
     output = load_decomposition_output(path)
+    if output.assumed_world:
+        mission = world_with(mission, {(e, a): v for e, a, v in output.assumed_world},
+                             f"{path}: mission_decomposition_uncertainty.world")
     listed = output.mission_decompositions
     if not -len(listed) <= index < len(listed):
         raise MissionError(Problem(path, f"mission_decompositions: no decomposition {index}: the file lists "
@@ -34,4 +40,4 @@ def listed_decomposition(mission: MissionStages, path: str, index: int = 0) -> l
     if not decomposers.decomposition_space(mission).contains(chosen):
         raise MissionError(Problem(path, f"{where}: not a valid decomposition of this mission "
                                          "(mutrose-cp validate tells why)"))
-    return sorted(chosen)
+    return mission, sorted(chosen)
