@@ -80,12 +80,26 @@ def ids(mission, decomposition) -> frozenset[str]:
 
 def content(tg, decomposition) -> frozenset[tuple]:
     """A decomposition by what it does, not by task ids: each task decomposition's goal-model
-    task, HDDL task, location, variable values and method path."""
-    def of(v: int) -> tuple:
-        d = tg.decomposition(v).decomposition
-        i = d.instance
-        return i.gm_task, i.name, str(i.location), tuple((p.hddl_param, str(p.value)) for p in i.parameters), d.number
-    return frozenset(of(v) for v in decomposition)
+    task, HDDL task, location, variable values and method path, and which of equal ones it is
+    (a task whose variable values do not tell its forAll copies apart has twins)."""
+    keys = _CONTENT.get(id(tg))
+    if keys is None:
+        seen: dict[tuple, int] = {}
+        keys = {}
+        for vertex in tg.decompositions():
+            d = vertex.decomposition
+            i = d.instance
+            key = (i.gm_task, i.name, str(i.location), tuple((p.hddl_param, str(p.value)) for p in i.parameters),
+                   d.number)
+            seen[key] = seen.get(key, 0) + 1
+            keys[vertex.index] = (*key, seen[key])
+        _CONTENT[id(tg)] = keys
+        _KEPT.append(tg)  # the id stays this graph's
+    return frozenset(keys[v] for v in decomposition)
+
+
+_CONTENT: dict[int, dict[int, tuple]] = {}
+_KEPT: list = []
 
 
 class BruteForce:
@@ -162,6 +176,31 @@ class BruteForce:
         return math.fsum(p for p, v in self.valid if decomposition in v)  # type: ignore[misc]
 
 
+def agree_judgement(mission: Mission, brute: BruteForce, key, judged) -> None:
+    """One possible decomposition's judgement against the brute force: robust, probability, and
+    the values it needs (every scenario that allows it gives the fact that value)."""
+    assert judged.possible and judged.robust == (key in brute.robust)
+    expected = brute.probability(key)
+    assert (judged.probability is None) == (expected is None)
+    if expected is not None:
+        assert judged.probability == pytest.approx(expected, abs=1e-12)
+    for fact, value in judged.needs:
+        index = mission.uncertainty.facts.index(fact)
+        assert all(values[index] == value for (_, valid), values in zip(brute.valid, brute.scenarios) if key in valid)
+
+
+def agree_sensing(mission: Mission, brute: BruteForce, space):
+    """The facts to sense first: a smallest set that settles the mission, or none when no set does."""
+    plan = sensing(space)
+    settles = brute.settling_sets()
+    if plan.facts is None:
+        assert not settles
+    else:
+        chosen = frozenset(mission.uncertainty.facts.index(f) for f in plan.facts)
+        assert chosen in settles and len(chosen) == min(len(s) for s in settles)
+    return plan
+
+
 def agree(mission: Mission, brute: BruteForce) -> None:
     """Every answer of the uncertain space against the brute force."""
     space = uncertain_space(mission)
@@ -171,22 +210,8 @@ def agree(mission: Mission, brute: BruteForce) -> None:
     assert set(listed) == brute.possible
     assert {ids(mission, d) for d in space.space(robust=True)} == brute.robust
     for key, decomposition in listed.items():
-        judged = space.judge(decomposition)
-        assert judged.possible and judged.robust == (key in brute.robust)
-        expected = brute.probability(key)
-        assert (judged.probability is None) == (expected is None)
-        if expected is not None:
-            assert judged.probability == pytest.approx(expected, abs=1e-12)
-        for fact, value in judged.needs:  # every scenario that allows it gives the fact that value
-            index = mission.uncertainty.facts.index(fact)
-            assert all(values[index] == value for (_, valid), values in zip(brute.valid, brute.scenarios) if key in valid)
-    plan = sensing(space)
-    settles = brute.settling_sets()
-    if plan.facts is None:
-        assert not settles
-    else:
-        chosen = frozenset(mission.uncertainty.facts.index(f) for f in plan.facts)
-        assert chosen in settles and len(chosen) == min(len(s) for s in settles)
+        agree_judgement(mission, brute, key, space.judge(decomposition))
+    plan = agree_sensing(mission, brute, space)
     if mission.uncertainty.with_probabilities:
         assert plan.best == pytest.approx(max((brute.probability(k) or 0 for k in brute.possible), default=0), abs=1e-12)
         expected = {mission.uncertainty.facts[i].text: brute.expected_best(i) for i in range(len(brute.scenarios[0]))}
@@ -400,22 +425,8 @@ def agree_expanded(mission: Mission, brute: BruteForce) -> None:
             frozenset([k]) for k in key})
         space.frame = i
         by_content = {next(iter(content(tg, [d.index]))): d.index for d in tg.decompositions()}
-        judged = space.judge([by_content[k] for k in key])
-        assert judged.possible and judged.robust == (key in brute.robust)
-        expected = brute.probability(key)
-        assert (judged.probability is None) == (expected is None)
-        if expected is not None:
-            assert judged.probability == pytest.approx(expected, abs=1e-12)
-        for fact, value in judged.needs:
-            index = mission.uncertainty.facts.index(fact)
-            assert all(values[index] == value for (_, valid), values in zip(brute.valid, brute.scenarios) if key in valid)
-    plan = sensing(space)
-    settles = brute.settling_sets()
-    if plan.facts is None:
-        assert not settles
-    else:
-        chosen = frozenset(mission.uncertainty.facts.index(f) for f in plan.facts)
-        assert chosen in settles and len(chosen) == min(len(s) for s in settles)
+        agree_judgement(mission, brute, key, space.judge([by_content[k] for k in key]))
+    plan = agree_sensing(mission, brute, space)
     if mission.uncertainty.with_probabilities and brute.possible:
         best_probability = max(brute.probability(k) or 0 for k in brute.possible)
         assert plan.best == pytest.approx(best_probability, abs=1e-12)

@@ -148,24 +148,8 @@ class ExpandedSpace(UncertainSpace):
         """The decomposition most likely to be valid (``costs`` by content id, see
         :meth:`content_costs`), in the task ids of the likeliest world where it is valid, which
         becomes the frame."""
-        self.require_listed()
-        if not self.uncertainty.with_probabilities:
-            missing = next(f for f in self.uncertainty.facts if f.probabilities is None)
-            raise MissionError(f"the most likely decomposition needs every fact's probabilities, and "
-                               f"{missing.entry.entity}.{missing.entry.attribute} ({missing.text}) has none "
-                               f"({missing.entry.where})")
-        chosen: list[int] = []
-        probability = 1.0
-        best: Part = ()
-        for c in self.components:
-            if not c.allowed:
-                raise MissionError("no decomposition is valid in any scenario")
-
-            def likelier(p: Part, c: UncertainComponent = c) -> tuple[float, int]:
-                return -(c.probability(p) or 0.0), sum(costs.get(d, 0) for d in p)
-            best = min(c.allowed, key=likelier)  # the first of the listing order among equals
-            chosen.extend(best)
-            probability *= c.probability(best) or 0.0
+        parts, probability = self.likeliest_parts(costs)
+        best = parts[-1]
         varying = self.components[-1]  # the last: where the worlds differ (``best`` is its part)
         expanded = len(self.uncertainty.expanded)
         weight = {i: math.fsum(varying.scenario_probability(s) for s in varying.allowed[best]
@@ -173,7 +157,7 @@ class ExpandedSpace(UncertainSpace):
                   for i, w in enumerate(self.worlds) if w.live}
         self.frame = max(weight, key=lambda i: (weight[i], -i))
         vertex_of = self.frame_world.vertex_of
-        return sorted(vertex_of[d] for d in chosen), probability
+        return sorted(vertex_of[d] for p in parts for d in p), probability
 
 
 def expanded_space(stages: MissionStages) -> ExpandedSpace:

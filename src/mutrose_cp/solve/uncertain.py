@@ -218,23 +218,29 @@ class UncertainSpace:
     def most_likely(self, costs: Mapping[int, int]) -> tuple[list[int], float]:
         """The decomposition most likely to be valid, ties broken by the least cost (``costs``
         per decomposition vertex), then by the listing order; and its probability."""
+        parts, probability = self.likeliest_parts(costs)
+        return sorted([*self.fixed, *(d for p in parts for d in p)]), probability
+
+    def likeliest_parts(self, costs: Mapping[int, int]) -> tuple[list[Part], float]:
+        """Each component's part most likely to be valid (the least costly among equals, then the
+        first listed), and the product of their probabilities."""
         self.require_listed()
         if not self.uncertainty.with_probabilities:
             missing = next(f for f in self.uncertainty.facts if f.probabilities is None)
             raise MissionError(f"the most likely decomposition needs every fact's probabilities, and "
                                f"{missing.entry.entity}.{missing.entry.attribute} ({missing.text}) has none "
                                f"({missing.entry.where})")
-        chosen, probability = list(self.fixed), 1.0
+        parts, probability = [], 1.0
         for c in self.components:
             if not c.allowed:
                 raise MissionError("no decomposition is valid in any scenario")
 
-            def key(p: Part) -> tuple[float, int]:
-                return (-(c.probability(p) or 0.0), sum(costs.get(d, 0) for d in p))
+            def key(p: Part, c: UncertainComponent = c) -> tuple[float, int]:
+                return -(c.probability(p) or 0.0), sum(costs.get(d, 0) for d in p)
             best = min(c.allowed, key=key)  # the first of the listing order among equals
-            chosen.extend(best)
+            parts.append(best)
             probability *= c.probability(best) or 0.0
-        return sorted(chosen), probability
+        return parts, probability
 
 
 @dataclass(frozen=True)
