@@ -173,6 +173,10 @@ def test_what_the_goal_model_reads_is_expanded_per_world(tmp_path, capsys):
     status, _, err = run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "-o", str(tmp_path / "x.json"))
     assert status == 2 and "list the robust ones (--robust) or the most likely (--most-likely)" in err
     assert not (tmp_path / "x.json").exists()
+    # XML has no uncertainty section to name the world in: refused rather than written unnamed
+    status, _, err = run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "--most-likely", "--format", "xml",
+                         "-o", str(tmp_path / "x.xml"))
+    assert status == 2 and "write JSON" in err and not (tmp_path / "x.xml").exists()
     status, _, err = run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "--robust", "-o",
                          str(tmp_path / "x.json"))
     assert status == 3 and "whatever the uncertain facts are" in err

@@ -326,6 +326,9 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     # where and how the output goes is settled, and refused if unsafe, before any work
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     file_type = _output_format(args, mission)
+    if mission.uncertainty is not None and mission.uncertainty.expanded and file_type == "xml" and not args.ihtn:
+        raise MissionError("the goal model reads uncertain facts, so the output is the mission expanded in one world, "
+                           "which only the JSON output's uncertainty section can name: write JSON (--format json)")
     if args.json_style == "standard" and file_type != "json":
         raise MissionError(f"--json-style standard applies to JSON output, and this output is {file_type}: "
                            "drop --json-style or write JSON (--format json)")
