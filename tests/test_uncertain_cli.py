@@ -217,11 +217,19 @@ def test_what_the_goal_model_reads_is_checked_and_bounded(tmp_path, capsys, monk
         assert status == 2 and "give 64 worlds to expand the mission in, more than the 16" in err, command
         assert "goal G2 reads needs_disinfection" in err and f"{many}:1:" in err
     from mutrose_cp.solve import scenarios
-    monkeypatch.setattr(scenarios, "MAX_PAIRS", 2)  # where the worlds differ, too many pairs: refused, not guessed
     two = write_json(tmp_path / "two.json", {"uncertain": [
-        {"entity": "Room101", "attribute": "needs_disinfection"}, {"entity": "Room102", "attribute": "door_open"}]})
-    status, _, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(two), "-q")
-    assert status == 2 and "differ in parts of the mission with more than 2 pairs" in err
+        {"entity": "Room101", "attribute": "needs_disinfection"}, {"entity": "Room101", "attribute": "door_open"}]})
+    exact = [int(run(capsys, "count", str(HOSPITAL), "--uncertain", str(two), "-q", *kind)[1]) for kind in ([], ["--robust"])]
+    # where the worlds differ, too many pairs to list: bounds that hold the exact counts, said so
+    monkeypatch.setattr(scenarios, "MAX_PAIRS", 2)
+    for kind, count in zip(([], ["--robust"]), exact):
+        status, out, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(two), *kind)
+        low, high = map(int, out.strip().split(".."))
+        assert status == 0 and low <= count <= high and low < high, (kind, out)
+        assert "bounds, not exact counts: the worlds of the uncertain facts the goal model reads differ" in err
+    for command in (["explain"], ["decompose", "--robust", "-o", str(tmp_path / "b.json")]):
+        status, _, err = run(capsys, *command[:1], str(HOSPITAL), "--uncertain", str(two), *command[1:])
+        assert status == 2 and "more than the 2 that are listed" in err, command
 
 
 def test_an_output_that_names_another_world(tmp_path, capsys):

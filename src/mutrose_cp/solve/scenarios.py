@@ -188,7 +188,7 @@ def expanded_space(stages: MissionStages) -> ExpandedSpace:
                     common.append(comp)
             else:
                 differing[id(w)].append(comp)
-    varying = _varying(uncertainty, live, differing, len(common))
+    varying = _varying(uncertainty, live, differing, len(common), len(live) == len(worlds))
     frame = next((i for i, w in enumerate(worlds) if w.live), next(i for i, w in enumerate(worlds) if w.space))
     base = worlds[frame].space
     assert base is not None
@@ -237,42 +237,56 @@ def _keyed_components(w: WorldSpace) -> list[tuple[ComponentKey, UncertainCompon
 
 
 def _varying(uncertainty: Uncertainty, live: list[WorldSpace], differing: dict[int, list[UncertainComponent]],
-             number: int) -> UncertainComponent:
+             number: int, every_world_live: bool) -> UncertainComponent:
     """The parts where the worlds differ, as one component over the facts the goal model reads
     and the other facts those parts read: an alternative per world and combination of the
-    differing components' alternatives, allowed in that world's scenarios."""
+    differing components' alternatives, allowed in that world's scenarios.  More pairs of an
+    alternative and a scenario than ``MAX_PAIRS`` are not listed: the component is bounded."""
     order = {f.atom: i for i, f in enumerate(uncertainty.facts)}
     read = {f for comps in differing.values() for c in comps for f in c.facts}
     facts: tuple[UncertainFact, ...] = (*uncertainty.expanded, *sorted(read, key=lambda f: order[f.atom]))
     index = {f.atom: i for i, f in enumerate(facts)}
     joints = tuple(j for j in uncertainty.joints if any(f.atom in index for f in j.facts))
     component = UncertainComponent(number, facts, {}, joints=joints)
-    allowed: dict[Part, set[Scenario]] = {}
-    pairs = 0
     expanded = len(uncertainty.expanded)
+    free = {id(w): [i for i, f in enumerate(facts[expanded:], expanded)
+                    if not any(f in c.facts for c in differing[id(w)])] for w in live}
+    pairs = sum(math.prod(sum(len(s) for s in c.allowed.values()) for c in differing[id(w)])
+                * math.prod(len(facts[i].values) for i in free[id(w)]) for w in live)
+    if pairs > MAX_PAIRS:
+        return _bounded(component, live, differing, pairs, every_world_live)
+    allowed: dict[Part, set[Scenario]] = {}
     for w in live:
         comps = differing[id(w)]
-        free = [i for i, f in enumerate(facts[expanded:], expanded) if not any(f in c.facts for c in comps)]
         for choice in itertools.product(*(list(c.allowed.items()) for c in comps)):
             part = tuple(sorted(d for p, _ in choice for d in p))
             for scenarios in itertools.product(*(s for _, s in choice)):
-                for others in itertools.product(*(facts[i].values for i in free)):
+                for others in itertools.product(*(facts[i].values for i in free[id(w)])):
                     values: list[Value] = [*w.world.values, *([False] * (len(facts) - expanded))]
                     for c, scenario in zip(comps, scenarios):
                         for f, v in zip(c.facts, scenario):
                             values[index[f.atom]] = v
-                    for i, v in zip(free, others):
+                    for i, v in zip(free[id(w)], others):
                         values[i] = v
                     if component.can_happen(tuple(values)):
                         allowed.setdefault(part, set()).add(tuple(values))
-                    pairs += 1
-                if pairs > MAX_PAIRS:
-                    raise MissionError(f"the worlds of the {expanded} uncertain facts the goal model reads differ in "
-                                       f"parts of the mission with more than {MAX_PAIRS} pairs of an alternative and a "
-                                       f"scenario ({', '.join(f.text for f in facts[:4])}"
-                                       f"{', ...' if len(facts) > 4 else ''}): give some of their values in the world "
-                                       "file")
     component.allowed = dict(sorted(((p, frozenset(s)) for p, s in allowed.items()), key=lambda item: item[0]))
+    return component
+
+
+def _bounded(component: UncertainComponent, live: list[WorldSpace], differing: dict[int, list[UncertainComponent]],
+             pairs: int, every_world_live: bool) -> UncertainComponent:
+    """Where the worlds differ, too many pairs to list: between bounds, said so.  Each world's
+    combinations of its differing parts' alternatives are possible (at least the most of one
+    world, at most all worlds' together); a robust one is robust in every world, so none is when
+    a world has no decomposition, and at most the fewest robust combinations of a world."""
+    possible = [math.prod(len(c.allowed) for c in differing[id(w)]) for w in live]
+    robust = [math.prod(sum(1 for p in c.allowed if c.robust(p)) for c in differing[id(w)]) for w in live]
+    facts = component.facts
+    component.bounds = (max(possible, default=0), sum(possible), min(robust) if every_world_live and robust else 0)
+    component.unlisted = (f"the worlds of the uncertain facts the goal model reads differ in parts of the mission with "
+                          f"{pairs} pairs of an alternative and a scenario ({', '.join(f.text for f in facts[:4])}"
+                          f"{', ...' if len(facts) > 4 else ''}), more than the {MAX_PAIRS} that are listed")
     return component
 
 
