@@ -78,28 +78,25 @@ def ids(mission, decomposition) -> frozenset[str]:
     return frozenset(tg.decomposition(v).decomposition.id for v in decomposition)
 
 
+def content_keys(tg) -> dict[int, tuple]:
+    """Each task decomposition by what it does, not by its task id: its goal-model task, HDDL
+    task, location, variable values and method path, and which of equal ones it is (a task whose
+    variable values do not tell its forAll copies apart has twins)."""
+    seen: dict[tuple, int] = {}
+    keys = {}
+    for vertex in tg.decompositions():
+        d = vertex.decomposition
+        i = d.instance
+        key = (i.gm_task, i.name, str(i.location), tuple((p.hddl_param, str(p.value)) for p in i.parameters), d.number)
+        seen[key] = seen.get(key, 0) + 1
+        keys[vertex.index] = (*key, seen[key])
+    return keys
+
+
 def content(tg, decomposition) -> frozenset[tuple]:
-    """A decomposition by what it does, not by task ids: each task decomposition's goal-model
-    task, HDDL task, location, variable values and method path, and which of equal ones it is
-    (a task whose variable values do not tell its forAll copies apart has twins)."""
-    keys = _CONTENT.get(id(tg))
-    if keys is None:
-        seen: dict[tuple, int] = {}
-        keys = {}
-        for vertex in tg.decompositions():
-            d = vertex.decomposition
-            i = d.instance
-            key = (i.gm_task, i.name, str(i.location), tuple((p.hddl_param, str(p.value)) for p in i.parameters),
-                   d.number)
-            seen[key] = seen.get(key, 0) + 1
-            keys[vertex.index] = (*key, seen[key])
-        _CONTENT[id(tg)] = keys
-        _KEPT.append(tg)  # the id stays this graph's
+    """A decomposition by content (:func:`content_keys`)."""
+    keys = content_keys(tg)
     return frozenset(keys[v] for v in decomposition)
-
-
-_CONTENT: dict[int, dict[int, tuple]] = {}
-_KEPT: list = []
 
 
 class BruteForce:
@@ -419,12 +416,11 @@ def agree_expanded(mission: Mission, brute: BruteForce) -> None:
         assert {content(frame, d) for d in space.space(robust=True)} == brute.robust
     else:
         assert space.space(robust=True).count == 0
-    worlds = [(i, w.stages.task_graph) for i, w in enumerate(space.worlds) if w.live]
+    worlds = [(i, {k: d for d, k in content_keys(w.stages.task_graph).items()})
+              for i, w in enumerate(space.worlds) if w.live]
     for key in brute.possible:
-        i, tg = next((i, tg) for i, tg in worlds if {content(tg, [d.index]) for d in tg.decompositions()} >= {
-            frozenset([k]) for k in key})
+        i, by_content = next((i, keys) for i, keys in worlds if set(keys) >= key)
         space.frame = i
-        by_content = {next(iter(content(tg, [d.index]))): d.index for d in tg.decompositions()}
         agree_judgement(mission, brute, key, space.judge([by_content[k] for k in key]))
     plan = agree_sensing(mission, brute, space)
     if mission.uncertainty.with_probabilities and brute.possible:

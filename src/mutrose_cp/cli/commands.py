@@ -20,7 +20,7 @@ from ..output.counts import shown_count
 from ..errors import MissionError, NoDecompositionError, Problem
 from ..interrupt import phase
 from ..mission import Mission
-from ..pipeline.scenarios import world_scenarios, world_with
+from ..pipeline.scenarios import world_scenarios
 from ..pipeline.stages import MissionStages
 from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
 from .flow import expanded, load_mission, mission_paths, read_uncertainty, refuse_outputs, report_warnings
@@ -92,8 +92,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     read_uncertainty(mission, args.uncertain, args.as_written)
-    if mission.uncertainty is not None and mission.uncertainty.expanded:
-        world_scenarios(mission.uncertainty)  # more worlds than are expanded: refused here too
+    if mission.expands_per_world:
+        world_scenarios(mission)  # more worlds than are expanded: refused here too
     base = (folder if folder is not None else cfg.parent.parent).resolve()
     written = (base / mission.config.output.file_path).resolve()
     if base != written and base not in written.parents:
@@ -252,6 +252,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     stdout), 2 on bad input (an unreadable file, or one that is no decomposition output)."""
     from ..io.decomposition_output import load_decomposition_output
     from ..validate import validate
+    from ..validate.listed import output_world
 
     if len(args.inputs) not in (2, 4):
         raise MissionError("expected HDDL GM CONFIG OUTPUT, or MISSION_DIR OUTPUT")
@@ -260,13 +261,10 @@ def cmd_validate(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = mission_paths(args)
     mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml)
     output = load_decomposition_output(output_path)
-    world: MissionStages = mission
-    if output.assumed_world:  # expanded in one world of uncertain facts the goal model reads
-        world = world_with(mission, {(e, a): v for e, a, v in output.assumed_world},
-                           f"{output_path}: mission_decomposition_uncertainty.world")
-        if not args.quiet:
-            print(f"note: checked in the world the output was expanded in: "
-                  f"{', '.join(f'{e}.{a} = {v}' for e, a, v in output.assumed_world)}", file=sys.stderr)
+    world = output_world(mission, output)  # expanded in one world of uncertain facts the goal model reads
+    if output.assumed_world and not args.quiet:
+        print(f"note: checked in the world the output was expanded in: "
+              f"{', '.join(f'{e}.{a} = {v}' for e, a, v in output.assumed_world)}", file=sys.stderr)
     progress = _Progress(not args.quiet, "mission decompositions checked")
     report = validate(world.domain, world.goal_model, world.config, world.initial_state, output,
                       world=world.knowledge, progress=progress)
@@ -326,7 +324,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     # where and how the output goes is settled, and refused if unsafe, before any work
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
     file_type = _output_format(args, mission)
-    if mission.uncertainty is not None and mission.uncertainty.expanded and file_type == "xml" and not args.ihtn:
+    if mission.expands_per_world and file_type == "xml" and not args.ihtn:
         raise MissionError("the goal model reads uncertain facts, so the output is the mission expanded in one world, "
                            "which only the JSON output's uncertainty section can name: write JSON (--format json)")
     if args.json_style == "standard" and file_type != "json":
@@ -339,7 +337,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     request = _request(args)
     solved: tuple[DecompositionResult, "UncertaintyRecord | None"] | None = None
     written: MissionStages = mission
-    if mission.uncertainty is not None and mission.uncertainty.expanded:
+    if mission.expands_per_world:
         # the goal model reads uncertain facts: the output is the expansion of one world, known
         # once the decompositions are chosen
         with phase("solving"):
@@ -458,14 +456,13 @@ def _solve_uncertain(args: argparse.Namespace, mission: Mission, request: Decomp
         costs = CostModel.read(args.costs) if args.costs else CostModel()
         table = (worlds.content_costs(costs.decomposition_costs) if worlds is not None
                  else costs.decomposition_costs(mission.task_graph))
-        chosen, _probability = uncertain.most_likely(table)
+        chosen, _probability = uncertain.most_likely(table)  # for worlds, chooses the frame written
         total = space.count if space is not None else uncertain.count(robust=False)
         result = DecompositionResult(Algorithm.CPSAT, [chosen], total, space)
     else:
         assert space is not None
         result = answer(worlds.output_stages if worlds is not None else mission, space, request)
-    written: MissionStages = worlds.output_stages if worlds is not None else mission
-    return (result, UncertaintyRecord(uncertain)), written
+    return (result, UncertaintyRecord(uncertain)), worlds.output_stages if worlds is not None else mission
 
 
 def _output_format(args: argparse.Namespace, mission: Mission) -> str:
@@ -514,7 +511,7 @@ def cmd_count(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet, uncertain=args.uncertain,
                            reads_uncertainty=True, as_written=args.as_written)
-    if mission.uncertainty is None or not mission.uncertainty.expanded:  # else expanded per world
+    if not mission.expands_per_world:
         with phase("expanding the mission"):
             _ = mission.constraints
     if mission.uncertainty is not None:

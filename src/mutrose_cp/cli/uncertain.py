@@ -68,7 +68,7 @@ def cmd_explain(args: argparse.Namespace) -> int:
         raise MissionError("explain says which uncertain facts to sense: give --uncertain FILE, or name one in the "
                            "configuration (docs/formats/uncertainty.md); why a mission has no valid decomposition "
                            "at all: decompose --explain")
-    if not mission.uncertainty.expanded:  # else expanded once per world
+    if not mission.expands_per_world:
         expanded(mission)
     with phase("solving"):
         space = decided_space(mission)

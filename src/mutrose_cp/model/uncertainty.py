@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Sequence
 
 AtomKey = tuple[str, tuple[str, ...]]
 Value = bool | float
@@ -88,6 +89,20 @@ class Joint:
         """The probability that the facts of ``values`` (some of this table's) have those values."""
         return math.fsum(p for outcome, p in self.outcomes
                          if all(values.get(f.atom, v) == v for f, v in zip(self.facts, outcome)))
+
+
+def scenario_probability(facts: Sequence[UncertainFact], joints: Sequence[Joint], values: Sequence[Value]) -> float:
+    """The probability of ``facts`` having ``values``: the product of the joint tables' (over the
+    facts they hold) and of the other facts' own probabilities (every fact must have some)."""
+    given = {f.atom: v for f, v in zip(facts, values)}
+    joined = {f.atom for j in joints for f in j.facts}
+    p = math.prod(j.probability(given) for j in joints)
+    for fact, value in zip(facts, values):
+        if fact.atom not in joined:
+            probability = fact.probability(value)
+            assert probability is not None
+            p *= probability
+    return p
 
 
 @dataclass(frozen=True)

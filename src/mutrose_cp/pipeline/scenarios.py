@@ -14,12 +14,11 @@ the goals and the facts, rather than expanded for minutes.
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass, replace
 from typing import Mapping
 
 from ..errors import MissionError
-from ..model.uncertainty import UncertainFact, Uncertainty, Value
+from ..model.uncertainty import UncertainFact, Value, scenario_probability
 from .stages import MissionStages
 
 #: at most this many expansions of the mission, one per scenario of the facts the goal model reads
@@ -40,21 +39,17 @@ class ScenarioWorld:
         return ", ".join(f.shown(v) for f, v in zip(facts, self.values))
 
 
-def world_scenarios(uncertainty: Uncertainty) -> list[tuple[Value, ...]]:
+def world_scenarios(stages: MissionStages) -> list[tuple[Value, ...]]:
     """The scenarios of the facts the goal model reads, one per world to expand the mission in
     (each fact's values in its order: false first), those of probability 0 left out; more than
     ``MAX_WORLDS`` are refused, naming the goals and the facts."""
+    uncertainty = stages.uncertainty
+    assert uncertainty is not None
     facts = uncertainty.expanded
     joints = [j for j in uncertainty.joints if j.facts[0].read_by_goal]
     known = all(f.probabilities is not None for f in facts)
-    joined = {f.atom for j in joints for f in j.facts}
-
-    def probability(values: tuple[Value, ...]) -> float:
-        given = {f.atom: v for f, v in zip(facts, values)}
-        independent = (f.probability(v) for f, v in zip(facts, values) if f.atom not in joined)
-        return math.prod(j.probability(given) for j in joints) * math.prod(p or 0.0 for p in independent)
-
-    scenarios = [s for s in itertools.product(*(f.values for f in facts)) if not known or probability(s) > 0]
+    scenarios = [s for s in itertools.product(*(f.values for f in facts))
+                 if not known or scenario_probability(facts, joints, s) > 0]
     if len(scenarios) > MAX_WORLDS:
         named = "; ".join(f"{f.text}: {f.read_by_goal}" for f in facts[:4]) + ("; ..." if len(facts) > 4 else "")
         raise MissionError(f"{len(facts)} uncertain facts that the goal model reads give {len(scenarios)} worlds to "
@@ -68,7 +63,7 @@ def scenario_worlds(stages: MissionStages) -> list[ScenarioWorld]:
     uncertainty = stages.uncertainty
     assert uncertainty is not None and uncertainty.expanded
     facts = uncertainty.expanded
-    scenarios = world_scenarios(uncertainty)
+    scenarios = world_scenarios(stages)
     expanded = {f.entry for f in facts}
     decided = tuple(e for e in stages.uncertainty_entries or () if e not in expanded)
     decided_joints = tuple(j for j in stages.uncertainty_joints

@@ -54,7 +54,13 @@ class MissionStages:
             return None
         sorts = build_sorts(self.domain, self.config, self.knowledge)
         return resolve_uncertainty(self.uncertainty_entries, self.uncertainty_source, self.config, sorts,
-                                   self.goal_model, self.uncertainty_joints, self.knowledge.entity_names)
+                                   self.goal_model, self.uncertainty_joints, self.knowledge)
+
+    @property
+    def expands_per_world(self) -> bool:
+        """Whether the goal model reads uncertain facts: the mission is then expanded once per
+        world of them (``pipeline/scenarios.py``), not as written."""
+        return self.uncertainty is not None and bool(self.uncertainty.expanded)
 
     @cached_property
     def initial_state(self) -> InitialState:

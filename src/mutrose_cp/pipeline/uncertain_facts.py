@@ -14,17 +14,16 @@ from dataclasses import replace
 from typing import Iterable, Iterator
 
 from ..errors import MissionError, Problem, closest
-from ..model import Configuration, GoalModel, SemanticMapping
+from ..model import Configuration, GoalModel, SemanticMapping, WorldKnowledge
 from ..model.expressions import Atom, BoolOp, Condition
 from ..model.uncertainty import Joint, JointEntry, UncertainEntry, UncertainFact, Uncertainty
 
 
 def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: Configuration,
                         sorts: dict[str, frozenset[str]], goal_model: GoalModel,
-                        joints: Iterable[JointEntry] = (), entities: frozenset[str] = frozenset()) -> Uncertainty:
+                        joints: Iterable[JointEntry] = (), knowledge: WorldKnowledge | None = None) -> Uncertainty:
     """The uncertain facts of the mission and their joint tables; every problem at once (exit 2).
-    ``entities``: the names of the world's records (what an attribute the goal model reads may
-    belong to)."""
+    ``knowledge``: the world, whose records an attribute the goal model reads must belong to."""
     problems: list[Problem] = []
     facts: list[UncertainFact] = []
     seen: set[tuple[str, tuple[str, ...]]] = set()
@@ -32,7 +31,7 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
     mappings = _AttributeMappings(config, sorts)
     for entry in entries:
         try:
-            fact = _goal_fact(entry, read[entry.attribute], mappings, entities) if entry.attribute in read \
+            fact = _goal_fact(entry, read[entry.attribute], mappings, knowledge) if entry.attribute in read \
                 else mappings.resolve(entry)
         except MissionError as err:
             problems.extend(err.problems)
@@ -94,11 +93,12 @@ def _joints(joints: Iterable[JointEntry], facts: list[UncertainFact], problems: 
 
 
 def _goal_fact(entry: UncertainEntry, read: tuple[str, str], mappings: "_AttributeMappings",
-               entities: frozenset[str]) -> UncertainFact:
+               knowledge: WorldKnowledge | None) -> UncertainFact:
     """An entry whose attribute the goal model reads: the atom the domain reads it as, when the
     configuration maps it, else the attribute itself; the entity must be a record of the world."""
     goal, text = read
     reader = f"goal {goal} reads {entry.attribute} ({text})"
+    entities = knowledge.entity_names if knowledge is not None else frozenset()  # read only when needed
     if entry.entity not in entities:
         guess = closest(entry.entity, sorted(entities))
         raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: the world has no record "

@@ -28,7 +28,7 @@ import math
 from collections import Counter
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable, Hashable, Iterable, Mapping
+from typing import Callable, Hashable, Iterable, Iterator, Mapping
 
 from ..errors import MissionError
 from ..model.task_graph import TaskGraph
@@ -44,9 +44,7 @@ ComponentKey = tuple[Hashable, ...]
 def decided_space(stages: MissionStages) -> UncertainSpace:
     """The mission's decompositions under its uncertain facts: expanded per world when the goal
     model reads some of them (:class:`ExpandedSpace`), else decided in one expansion."""
-    uncertainty = stages.uncertainty
-    assert uncertainty is not None
-    return expanded_space(stages) if uncertainty.expanded else uncertain_space(stages)
+    return expanded_space(stages) if stages.expands_per_world else uncertain_space(stages)
 
 
 @dataclass
@@ -98,10 +96,6 @@ class ExpandedSpace(UncertainSpace):
     def component_of(self) -> dict[int, int]:
         """Content id -> the index of its component in :attr:`components`."""
         return {d: i for i, c in enumerate(self.components) for part in c.allowed for d in part}
-
-    def bounds(self, robust: bool) -> tuple[int, int]:
-        counted = [c.counted(robust) for c in self.components]
-        return math.prod(low for low, _ in counted), math.prod(high for _, high in counted)
 
     def parts(self, decomposition: Iterable[int]) -> list[Part]:
         """``decomposition`` (task ids of the frame world)'s part in each component."""
@@ -245,8 +239,8 @@ def _varying(uncertainty: Uncertainty, live: list[WorldSpace], differing: dict[i
     order = {f.atom: i for i, f in enumerate(uncertainty.facts)}
     read = {f for comps in differing.values() for c in comps for f in c.facts}
     facts: tuple[UncertainFact, ...] = (*uncertainty.expanded, *sorted(read, key=lambda f: order[f.atom]))
-    index = {f.atom: i for i, f in enumerate(facts)}
-    joints = tuple(j for j in uncertainty.joints if any(f.atom in index for f in j.facts))
+    atoms = {f.atom for f in facts}
+    joints = tuple(j for j in uncertainty.joints if any(f.atom in atoms for f in j.facts))
     component = UncertainComponent(number, facts, {}, joints=joints)
     expanded = len(uncertainty.expanded)
     free = {id(w): [i for i, f in enumerate(facts[expanded:], expanded)
@@ -257,21 +251,31 @@ def _varying(uncertainty: Uncertainty, live: list[WorldSpace], differing: dict[i
         return _bounded(component, live, differing, pairs, every_world_live)
     allowed: dict[Part, set[Scenario]] = {}
     for w in live:
-        comps = differing[id(w)]
-        for choice in itertools.product(*(list(c.allowed.items()) for c in comps)):
-            part = tuple(sorted(d for p, _ in choice for d in p))
-            for scenarios in itertools.product(*(s for _, s in choice)):
-                for others in itertools.product(*(facts[i].values for i in free[id(w)])):
-                    values: list[Value] = [*w.world.values, *([False] * (len(facts) - expanded))]
-                    for c, scenario in zip(comps, scenarios):
-                        for f, v in zip(c.facts, scenario):
-                            values[index[f.atom]] = v
-                    for i, v in zip(free[id(w)], others):
-                        values[i] = v
-                    if component.can_happen(tuple(values)):
-                        allowed.setdefault(part, set()).add(tuple(values))
+        for part, scenario in _world_pairs(w, differing[id(w)], facts, free[id(w)]):
+            if component.can_happen(scenario):
+                allowed.setdefault(part, set()).add(scenario)
     component.allowed = dict(sorted(((p, frozenset(s)) for p, s in allowed.items()), key=lambda item: item[0]))
     return component
+
+
+def _world_pairs(w: WorldSpace, comps: list[UncertainComponent], facts: tuple[UncertainFact, ...],
+                 free: list[int]) -> Iterator[tuple[Part, Scenario]]:
+    """World ``w``'s pairs of an alternative where the worlds differ (one part of each of its
+    differing components) and a scenario of ``facts`` (the world's values, the values its parts
+    are allowed in, and any value of the ``free`` facts, which its parts do not read)."""
+    index = {f.atom: i for i, f in enumerate(facts)}
+    expanded = len(w.world.values)
+    for choice in itertools.product(*(list(c.allowed.items()) for c in comps)):
+        part = tuple(sorted(d for p, _ in choice for d in p))
+        given = itertools.product(*(s for _, s in choice))
+        for scenarios, others in itertools.product(given, itertools.product(*(facts[i].values for i in free))):
+            values: list[Value] = [*w.world.values, *([False] * (len(facts) - expanded))]
+            for c, scenario in zip(comps, scenarios):
+                for f, v in zip(c.facts, scenario):
+                    values[index[f.atom]] = v
+            for i, v in zip(free, others):
+                values[i] = v
+            yield part, tuple(values)
 
 
 def _bounded(component: UncertainComponent, live: list[WorldSpace], differing: dict[int, list[UncertainComponent]],

@@ -34,7 +34,7 @@ from functools import cached_property
 from typing import Iterable, Iterator, Mapping, Sequence
 
 from ..errors import MissionError
-from ..model.uncertainty import AtomKey, Joint, UncertainFact, Uncertainty, Value
+from ..model.uncertainty import AtomKey, Joint, UncertainFact, Uncertainty, Value, scenario_probability
 from ..pipeline.stages import MissionStages
 from .boolean_model import Clause
 from .cpsat import (
@@ -122,14 +122,7 @@ class UncertainComponent:
         computed once per scenario (a part's probability sums them, and parts share them)."""
         p = self.weights.get(scenario)
         if p is None:
-            values = {f.atom: v for f, v in zip(self.facts, scenario)}
-            p = math.prod(j.probability(values) for j in self.joints)
-            for fact, value in zip(self.facts, scenario):
-                if fact.atom not in self.joined:
-                    probability = fact.probability(value)
-                    assert probability is not None
-                    p *= probability
-            self.weights[scenario] = p
+            p = self.weights[scenario] = scenario_probability(self.facts, self.joints, scenario)
         return p
 
     def assumptions(self, part: Part) -> list[tuple[UncertainFact, Value]]:

@@ -8,10 +8,19 @@ run.  Every refusal names the file and the place in it (exit status 2)."""
 from __future__ import annotations
 
 from ..errors import MissionError, Problem
-from ..io.decomposition_output import load_decomposition_output
+from ..io.decomposition_output import DecompositionOutput, load_decomposition_output
 from ..pipeline.scenarios import world_with
 from ..pipeline.stages import MissionStages
 from ..solve import decomposers
+
+
+def output_world(mission: MissionStages, output: DecompositionOutput) -> MissionStages:
+    """``mission`` in the world ``output`` says its tasks were expanded in (its uncertainty
+    section's ``world``, written when the goal model reads uncertain facts), else ``mission``."""
+    if not output.assumed_world:
+        return mission
+    return world_with(mission, {(e, a): v for e, a, v in output.assumed_world},
+                      f"{output.source}: mission_decomposition_uncertainty.world")
 
 
 def listed_decomposition(mission: MissionStages, path: str, index: int = 0) -> tuple[MissionStages, list[int]]:
@@ -19,9 +28,7 @@ def listed_decomposition(mission: MissionStages, path: str, index: int = 0) -> t
     and the mission they are of: ``mission``, or ``mission`` in the world the file says its
     tasks were expanded in (docs/formats/output.md, ``mission_decomposition_uncertainty``)."""
     output = load_decomposition_output(path)
-    if output.assumed_world:
-        mission = world_with(mission, {(e, a): v for e, a, v in output.assumed_world},
-                             f"{path}: mission_decomposition_uncertainty.world")
+    mission = output_world(mission, output)
     listed = output.mission_decompositions
     if not -len(listed) <= index < len(listed):
         raise MissionError(Problem(path, f"mission_decompositions: no decomposition {index}: the file lists "
