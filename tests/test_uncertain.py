@@ -19,8 +19,9 @@ from lxml import etree
 from mutrose_cp.errors import MissionError
 from mutrose_cp.mission import Mission
 from mutrose_cp.pipeline.uncertain_facts import goal_model_reads
-from mutrose_cp.solve.scenarios import ExpandedSpace, decided_space
-from mutrose_cp.solve.uncertain import sensing, uncertain_space
+from mutrose_cp.model.uncertainty import UncertainEntry, UncertainFact
+from mutrose_cp.solve.scenarios import ExpandedSpace, component_key, decided_space, split_shared
+from mutrose_cp.solve.uncertain import UncertainComponent, sensing, uncertain_space
 from conftest import ROOT, require_reference
 from missiongen import MissionSpec, missions
 
@@ -66,10 +67,12 @@ def rewrite_world(world: Path, values: dict[tuple[str, str], bool | float], out:
     for (entity, attribute), value in values.items():
         records = [el for el in tree.getroot().iter() if el.findtext("name") == entity]
         assert records, entity
-        field = records[0].find(attribute)
-        if field is None:
-            field = etree.SubElement(records[0], attribute)
-        field.text = ("True" if value else "False") if isinstance(value, bool) else f"{value:g}"
+        for record in records:  # the entity wherever the world describes it
+            field = record.find(attribute)
+            if field is None:
+                field = etree.SubElement(record, attribute)
+            field.text = (("True" if value else "False") if isinstance(value, bool)
+                          else str(int(value)) if float(value).is_integer() else str(value))
     tree.write(str(out))
 
 
@@ -116,15 +119,17 @@ class BruteForce:
         original = world.read_bytes()
         try:
             for values in every:
-                p: float | None = 1.0
-                for i, ((options, probabilities), value) in enumerate(zip(self.options, values)):
-                    if joint is not None and i in joint[0]:
-                        continue
-                    p = None if p is None or probabilities is None else p * probabilities[options.index(value)]
-                if joint is not None and p is not None:
-                    p *= joint[1].get(tuple(values[i] for i in joint[0]), 0.0)
-                if p == 0:
+                # the scenario's probability (None when a fact has none), and whether it can
+                # happen: no value of probability 0, whatever the facts without probabilities
+                factors: list[float | None] = [
+                    None if probabilities is None else probabilities[options.index(value)]
+                    for i, ((options, probabilities), value) in enumerate(zip(self.options, values))
+                    if joint is None or i not in joint[0]]
+                if joint is not None:
+                    factors.append(joint[1].get(tuple(values[i] for i in joint[0]), 0.0))
+                if any(q == 0 for q in factors):
                     continue  # a scenario that cannot happen
+                p = None if None in factors else math.prod(q for q in factors if q is not None)
                 self.scenarios.append(values)
                 world.write_bytes(original)
                 rewrite_world(world, {(e, a): v for (e, a, _), v in zip(entries, values)}, world)
@@ -259,13 +264,17 @@ def test_generated_missions_against_brute_force(tmp_path_factory, case):
     candidates = [(r, a, kind) for r in rooms for a, kind in attributes]
     assume(candidates)
     chosen = rnd.sample(candidates, min(len(candidates), rnd.randint(1, 8)))
-    with_probabilities = rnd.random() < 0.7
+    # every fact with probabilities, some, or none; a value of probability 0 (a fact certain
+    # after all) rules its scenarios out, with or without the other facts' probabilities
+    mode = rnd.choice(["all", "all", "some", "none"])
 
     def spec(kind: str):  # a boolean's P(true), or a number's values (levels 0-2), some with probabilities
+        with_probabilities = mode == "all" or (mode == "some" and rnd.random() < 0.5)
         if kind == "predicate":
-            return rnd.choice([0.1, 0.25, 0.5, 0.9]) if with_probabilities else None
+            return rnd.choice([0.0, 0.1, 0.25, 0.5, 0.9, 1.0]) if with_probabilities else None
         values = rnd.sample([0.0, 1.0, 2.0], rnd.randint(2, 3))
-        return dict(zip(values, [0.5, 0.5] if len(values) == 2 else [0.2, 0.3, 0.5])) if with_probabilities else values
+        weights = rnd.choice([[0.5, 0.5], [0.0, 1.0]] if len(values) == 2 else [[0.2, 0.3, 0.5], [0.4, 0.0, 0.6]])
+        return dict(zip(values, weights)) if with_probabilities else values
     entries = [(r, a, spec(kind)) for r, a, kind in chosen]
     brute = BruteForce(hddl, gm, config, world, entries)
     try:
@@ -486,9 +495,10 @@ def test_generated_missions_whose_goal_model_reads_uncertain_facts(tmp_path_fact
     domain = [(r, m.name) for r in rooms for m in mission.config.semantic_mapping
               if m.type == "attribute" and m.mapped_type == "predicate" and m.name not in read and m.relates_to == "Room"]
     assume(goal)
-    with_probabilities = rnd.random() < 0.7
+    mode = rnd.choice(["all", "all", "some", "none"])  # facts with probabilities: every one, some or none
     chosen = rnd.sample(goal, min(len(goal), rnd.randint(1, 3))) + rnd.sample(domain, min(len(domain), rnd.randint(0, 3)))
-    entries = [(r, a, rnd.choice([0.2, 0.5, 0.7]) if with_probabilities else None) for r, a in chosen]
+    entries = [(r, a, rnd.choice([0.0, 0.2, 0.5, 0.7, 1.0])
+                if mode == "all" or (mode == "some" and rnd.random() < 0.5) else None) for r, a in chosen]
     brute = BruteForce(hddl, gm, config, world, entries, identity=content)
     try:
         mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(folder / "u.json", entries))
@@ -497,3 +507,22 @@ def test_generated_missions_whose_goal_model_reads_uncertain_facts(tmp_path_fact
     except MissionError as refused:  # what is read straight from the world, in some world
         assert "unique-branch" in str(refused) or "read by a recursive method" in str(refused), str(refused)
 
+
+
+def test_components_are_shared_across_worlds_only_with_the_same_scenarios():
+    """A component is decided once for every world only when each world has it with the same
+    alternatives allowed in the same scenarios: alternatives alike but allowed in other scenarios
+    are where the worlds differ (shared, one world's scenarios would stand for both), and a
+    component one world has twice is shared once."""
+    entry = UncertainEntry("Room104", "door_open", None, None, "u.json:1:1")
+    door = UncertainFact(entry, ("door-open", ("Room104",)), False, (False, True), None)
+    either = frozenset({(False,), (True,)})
+    first = {(1,): frozenset({(True,)}), (2,): either}
+    second = {(1,): either, (2,): either}
+
+    def keyed(*alloweds):
+        return [(component_key((door,), a), UncertainComponent(n, (door,), a)) for n, a in enumerate(alloweds)]
+    common, apart = split_shared([keyed(first), keyed(second)])
+    assert common == [] and [[c.allowed for c in a] for a in apart] == [[first], [second]]
+    common, apart = split_shared([keyed(first, second), keyed(dict(first))])
+    assert [c.allowed for c in common] == [first] and [[c.allowed for c in a] for a in apart] == [[second], []]

@@ -341,3 +341,124 @@ def test_the_example_with_a_fact_the_goal_model_reads(mission, capsys, tmp_path)
     assert run(capsys, "decompose", str(mission), "--uncertain", orders, "--most-likely", "-o", str(plan), "-q")[0] == 0
     status, _, err = run(capsys, "validate", str(mission), str(plan))
     assert status == 0 and "Room204.dose_due = False" in err
+
+
+def hospital_copy(tmp_path: Path, query: str | None = None, first_record: str = "",
+                  fields: dict[str, str] | None = None) -> Path:
+    """The hospital mission in ``tmp_path``, its query's condition replaced, a record written
+    first in the world, and a field added to every room (by name: text)."""
+    folder = tmp_path / "hospital"
+    shutil.copytree(HOSPITAL, folder)
+    gm = next((folder / "gm").iterdir())
+    if query is not None:
+        gm.write_text(gm.read_text().replace("r.needs_disinfection)", f"{query})"))
+    world = folder / "knowledge" / "world_db.xml"
+    text = world.read_text().replace("<world_db>", f"<world_db>{first_record}", 1)
+    for room, value in (fields or {}).items():
+        text = text.replace(f"<name>{room}</name>", f"<name>{room}</name><dose>{value}</dose>", 1)
+    world.write_text(text)
+    return folder
+
+
+def test_numbers_the_goal_model_reads_are_written_into_each_world_exactly(tmp_path, capsys):
+    """A dose compared by a query, uncertain between 1234567 and 1234568: each world's file says
+    its value to the digit (a rounded 1.23457e+06 made the two worlds one), and so do the output's
+    world and needs."""
+    folder = hospital_copy(tmp_path, "r.dose > 1234567",
+                           fields={"Room101": "1234568", "Room102": "1234568", "Room103": "0", "Room104": "1234568"})
+    assert run(capsys, "count", str(folder), "-q")[:2] == (0, "36\n")
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "dose", "distribution": {"1234567": 0.7, "1234568": 0.3}}]})
+    assert run(capsys, "count", str(folder), "--uncertain", str(u), "-q")[:2] == (0, "48\n")
+    assert run(capsys, "count", str(folder), "--uncertain", str(u), "-q", "--robust")[:2] == (0, "0\n")
+    plan = tmp_path / "plan.json"
+    assert run(capsys, "decompose", str(folder), "--uncertain", str(u), "--most-likely", "-o", str(plan), "-q")[0] == 0
+    section = json.loads(plan.read_text())["mission_decomposition_uncertainty"]
+    assert section["world"] == [{"entity": "Room101", "attribute": "dose", "value": "1234567"}]
+    assert section["decompositions"][0]["needs"] == ["dose(Room101) = 1234567"]
+    assert section["uncertain_facts"][0]["values"] == ["1234567", "1234568"]
+    status, _, err = run(capsys, "validate", str(folder), str(plan))
+    assert status == 0 and "Room101.dose = 1234567" in err
+
+
+def test_a_nested_copy_of_an_entity_does_not_take_its_value_alone(tmp_path, capsys):
+    """A note that names Room101, written before Room101's own record: the query reads the
+    record, so each world must give the record the value, not the first element named Room101."""
+    note = "<Note><name>handover</name><about><Room><name>Room101</name></Room></about></Note>"
+    folder = hospital_copy(tmp_path, first_record=note)
+    assert run(capsys, "count", str(folder), "-q")[:2] == (0, "36\n")
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "needs_disinfection", "probability": 0.3}]})
+    assert run(capsys, "count", str(folder), "--uncertain", str(u), "-q")[:2] == (0, "48\n")  # as without the note
+    assert run(capsys, "count", str(folder), "--uncertain", str(u), "-q", "--robust")[:2] == (0, "0\n")
+
+
+def test_the_kind_of_a_fact_the_goal_model_reads_is_checked(tmp_path, capsys):
+    """Numbers for a boolean the goal model reads, a probability for a number it compares, and
+    numbers for an attribute the configuration maps to a predicate: each refused, located."""
+    folder = hospital_copy(tmp_path, "r.needs_disinfection && r.door_open && r.dose > 5",
+                           fields={"Room101": "9", "Room102": "9", "Room103": "9", "Room104": "9"})
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "needs_disinfection", "values": [0, 1]},
+        {"entity": "Room102", "attribute": "dose", "probability": 0.5},
+        {"entity": "Room104", "attribute": "door_open", "distribution": {"0": 0.5, "1": 0.5}}]})
+    status, _, err = run(capsys, "check", str(folder), "--uncertain", str(u))
+    assert status == 2 and "3 problems found" in err, err
+    assert f"{u}:1:" in err and "Room101.needs_disinfection: goal G2 reads needs_disinfection" in err
+    assert "as a boolean: give \"probability\"" in err
+    assert "Room102.dose: goal G2 reads dose" in err and "as a number: give its possible \"values\"" in err
+    assert "Room104.door_open is the predicate door-open: give \"probability\"" in err
+    good = write_json(tmp_path / "good.json", {"uncertain": [
+        {"entity": "Room102", "attribute": "dose", "values": [0, 9]},
+        {"entity": "Room104", "attribute": "door_open", "probability": 0.5}]})
+    assert run(capsys, "check", str(folder), "--uncertain", str(good), "-q")[0] == 0
+
+
+def test_a_value_of_probability_0_is_no_scenario_beside_facts_without_probabilities(tmp_path, capsys):
+    """Room101 certainly needs disinfection (probability 1), and whether Room102 does and Room104's
+    door are unknown (no probabilities): the worlds where Room101 needs none cannot happen, so the
+    answers are those of the other two facts alone.  Likewise for a fact the domain reads: Room102's door closed for sure."""
+    door = {"entity": "Room104", "attribute": "door_open"}
+    needs = {"entity": "Room102", "attribute": "needs_disinfection"}
+    alone = write_json(tmp_path / "alone.json", {"uncertain": [needs, door]})
+    certain = write_json(tmp_path / "certain.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "needs_disinfection", "probability": 1.0}, needs, door]})
+    occupied = {"entity": "Room102", "attribute": "occupied"}
+    alone_102 = write_json(tmp_path / "alone102.json", {"uncertain": [occupied]})
+    closed = write_json(tmp_path / "closed.json", {"uncertain": [
+        {"entity": "Room102", "attribute": "door_open", "probability": 0.0}, occupied]})
+    for expected, given in ((alone, certain), (alone_102, closed)):
+        for kind in ("--possible", "--robust"):
+            want = run(capsys, "count", str(HOSPITAL), "--uncertain", str(expected), "-q", kind)
+            got = run(capsys, "count", str(HOSPITAL), "--uncertain", str(given), "-q", kind)
+            assert want[0] == got[0] == 0 and want[1] == got[1], (given.name, kind, want[1], got[1])
+    status, _, err = run(capsys, "count", str(HOSPITAL), "--uncertain", str(certain))
+    assert status == 0 and "expanded in 2 worlds" in err, err
+
+
+def test_xml_output_is_refused_before_any_warning_about_its_suffix(tmp_path, capsys):
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "needs_disinfection", "probability": 0.3}]})
+    status, _, err = run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "--most-likely",
+                         "-o", str(tmp_path / "x.xml"))
+    assert status == 2 and "write JSON" in err and "warning" not in err, err
+    assert not (tmp_path / "x.xml").exists()
+
+
+def test_a_mission_with_no_task_in_any_world_has_no_decomposition(tmp_path, capsys):
+    """A query that matches nothing in the only world that can happen: no decomposition, as
+    when the world is known (count 0), and each command says so instead of failing."""
+    folder = hospital_copy(tmp_path, "r.dose > 5")  # no room has a dose
+    assert run(capsys, "count", str(folder), "-q")[:2] == (0, "0\n")
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "dose", "distribution": {"0": 1.0, "9": 0.0}}]})
+    status, out, err = run(capsys, "count", str(folder), "--uncertain", str(u))
+    assert (status, out) == (0, "0\n") and "expanded in 1 world of the 1 fact" in err, err
+    assert "no decomposition when dose(Room101) = 0: no entity of the world matched the queries" in err
+    assert run(capsys, "count", str(folder), "--uncertain", str(u), "--robust", "-q")[:2] == (0, "0\n")
+    assert run(capsys, "explain", str(folder), "--uncertain", str(u), "-q")[0] == 3
+    for option in ("--robust", "--most-likely"):
+        status, _, err = run(capsys, "decompose", str(folder), "--uncertain", str(u), option, "-o",
+                             str(tmp_path / "x.json"))
+        assert status == 3 and "no mission decomposition is valid" in err and "Traceback" not in err, err
+        assert not (tmp_path / "x.json").exists()

@@ -323,7 +323,7 @@ def cmd_decompose(args: argparse.Namespace) -> int:
     mission.progress = _Progress(not args.quiet).stage
     # where and how the output goes is settled, and refused if unsafe, before any work
     out_path = Path(args.output) if args.output else _default_output(mission, folder)
-    file_type = _output_format(args, mission)
+    file_type, format_warning = _output_format(args, mission)
     if mission.expands_per_world and file_type == "xml" and not args.ihtn:
         raise MissionError("the goal model reads uncertain facts, so the output is the mission expanded in one world, "
                            "which only the JSON output's uncertainty section can name: write JSON (--format json)")
@@ -332,6 +332,8 @@ def cmd_decompose(args: argparse.Namespace) -> int:
                            "drop --json-style or write JSON (--format json)")
     refuse_outputs((out_path if not args.ihtn else None,), mission, (hddl, gm, cfg, args.costs),
                              folders=(args.ihtn,))
+    if format_warning and not args.quiet:  # said once the output is accepted, never before a refusal
+        print(format_warning, file=sys.stderr)
     label = "tasks visited" if args.algorithm == "exploratory" else "components solved"
     progress = _Progress(not args.quiet, f"mission decompositions: {label}")
     request = _request(args)
@@ -465,20 +467,20 @@ def _solve_uncertain(args: argparse.Namespace, mission: Mission, request: Decomp
     return (result, UncertaintyRecord(uncertain)), worlds.output_stages if worlds is not None else mission
 
 
-def _output_format(args: argparse.Namespace, mission: Mission) -> str:
-    """``--format``; else the suffix of ``-o`` (``x.json`` is JSON), with a warning when the
-    configuration asks for the other format; else the configuration's ``output.file_type``."""
+def _output_format(args: argparse.Namespace, mission: Mission) -> tuple[str, str]:
+    """``--format``; else the suffix of ``-o`` (``x.json`` is JSON), with a warning to give when
+    the configuration asks for the other format; else the configuration's ``output.file_type``."""
     configured = mission.config.output.file_type
     if args.format:
-        return str(args.format)
+        return str(args.format), ""
     by_suffix = OUTPUT_SUFFIXES.get(Path(args.output).suffix.lower()) if args.output else None
     if by_suffix is None:
-        return configured
-    if by_suffix != configured and not args.quiet:
-        print(f"warning: {args.output}: writing {by_suffix}, as the suffix says, although {mission.config_path} asks "
-              f"for {configured} (output.file_type); --format {configured} follows the configuration",
-              file=sys.stderr)
-    return by_suffix
+        return configured, ""
+    if by_suffix == configured:
+        return by_suffix, ""
+    return by_suffix, (f"warning: {args.output}: writing {by_suffix}, as the suffix says, although "
+                       f"{mission.config_path} asks for {configured} (output.file_type); --format {configured} "
+                       "follows the configuration")
 
 
 def cmd_graph(args: argparse.Namespace) -> int:

@@ -31,7 +31,8 @@ def worlds_line(space: ExpandedSpace) -> str:
     """How many worlds of the facts the goal model reads were expanded, and why a world has no
     decomposition when the mission cannot be expanded there."""
     facts = space.uncertainty.expanded
-    line = (f"  expanded in {len(space.worlds)} worlds of the {len(facts)} "
+    worlds = len(space.worlds)
+    line = (f"  expanded in {worlds} {'world' if worlds == 1 else 'worlds'} of the {len(facts)} "
             f"{'fact' if len(facts) == 1 else 'facts'} the goal model reads")
     for w in space.worlds:
         if w.space is None:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from decimal import Decimal
 from typing import Sequence
 
 AtomKey = tuple[str, tuple[str, ...]]
@@ -70,7 +71,7 @@ class UncertainFact:
         ``stock(Kitchen) = 2``."""
         if not self.numeric:
             return self.text if value else f"not {self.text}"
-        return f"{self.text} = {value:g}" if isinstance(value, float) else f"{self.text} = {value}"
+        return f"{self.text} = {value_text(value)}"
 
     def probability(self, value: Value) -> float | None:
         if self.probabilities is None:
@@ -89,6 +90,29 @@ class Joint:
         """The probability that the facts of ``values`` (some of this table's) have those values."""
         return math.fsum(p for outcome, p in self.outcomes
                          if all(values.get(f.atom, v) == v for f, v in zip(self.facts, outcome)))
+
+
+def value_text(value: Value) -> str:
+    """A value as a world file writes it, read back exactly: ``True``/``False``; an integral
+    number without a point (``1234567``); any other in plain decimals (``0.0000001``), since
+    the world's reader takes a number without a point for an integer and ignores an exponent."""
+    if isinstance(value, bool):
+        return "True" if value else "False"
+    if float(value).is_integer():
+        return str(int(value))
+    return format(Decimal(repr(float(value))), "f")
+
+
+def scenario_can_happen(facts: Sequence[UncertainFact], joints: Sequence[Joint], values: Sequence[Value]) -> bool:
+    """Whether ``facts`` having ``values`` has a positive probability: no joint table leaves the
+    combination out and no fact has probability 0 for its value.  A fact without probabilities
+    allows each of its values, and takes nothing from the others' probabilities of 0."""
+    given = {f.atom: v for f, v in zip(facts, values)}
+    joined = {f.atom for j in joints for f in j.facts}
+    if any(j.probability(given) <= 0 for j in joints):
+        return False
+    return all(fact.atom in joined or (p := fact.probability(value)) is None or p > 0
+               for fact, value in zip(facts, values))
 
 
 def scenario_probability(facts: Sequence[UncertainFact], joints: Sequence[Joint], values: Sequence[Value]) -> float:

@@ -94,23 +94,27 @@ class WorldKnowledge:
         return frozenset(rid for el in self.root.iter() if isinstance(el.tag, str)
                          and (rid := record_id(el, self.unique_id)) is not None)
 
-    def entity_record(self, root: etree._Element, entity: str) -> etree._Element | None:
-        """The first record (in document order, at any depth) of ``root`` whose unique id is
-        ``entity``."""
-        return next((el for el in root.iter() if isinstance(el.tag, str) and el is not root
-                     and record_id(el, self.unique_id) == entity), None)
+    def entity_records(self, root: etree._Element, entity: str) -> list[etree._Element]:
+        """Every record of ``root`` (at any depth, in document order) whose unique id is
+        ``entity``: the entity itself and every nested copy of it."""
+        return [el for el in root.iter() if isinstance(el.tag, str) and el is not root
+                and record_id(el, self.unique_id) == entity]
 
     def with_fields(self, values: Mapping[tuple[str, str], str]) -> "WorldKnowledge":
-        """A copy of this world where each (entity, field) has the text given (the field added
-        to the entity's record when the record has none): the world of one scenario."""
+        """A copy of this world where each (entity, field) has the text given, in every record
+        of the entity (the field added to a record that has none): the world of one scenario.
+        Every record, not the first, because a query reads the top-level record, a path the
+        nested one, and the domain each record of its type: a nested reference written before
+        the entity's own record must not take the value alone."""
         root = copy.deepcopy(self.root)
         for (entity, name), text in values.items():
-            record = self.entity_record(root, entity)
-            assert record is not None, entity  # checked when the uncertainty file was resolved
-            field = child(record, name)
-            if field is None:
-                field = etree.SubElement(record, name)
-            field.text = text
+            records = self.entity_records(root, entity)
+            assert records, entity  # checked when the uncertainty file was resolved
+            for record in records:
+                field = child(record, name)
+                if field is None:
+                    field = etree.SubElement(record, name)
+                field.text = text
         return WorldKnowledge(self.source, root, self.unique_id, self.warnings)
 
     # -- per-record helpers --------------------------------------------------------------------

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Iterable, Iterator
 
-from ..pipeline.scenarios import world_text
+from ..model.uncertainty import value_text
 from ..solve.scenarios import ExpandedSpace
 from ..solve.uncertain import Judgement, UncertainSpace
 
@@ -46,7 +46,7 @@ class UncertaintyRecord:
         for fact in self.space.uncertainty.facts:
             entry: dict[str, Any] = {"fact": fact.text, "entity": fact.entry.entity, "attribute": fact.entry.attribute}
             if fact.numeric:  # its values, with their probabilities when given
-                entry["values"] = [scalar(v) for v in fact.values]
+                entry["values"] = [v if standard else value_text(v) for v in fact.values]  # to the digit
                 if fact.probabilities is not None:
                     entry["probabilities"] = [scalar(p) for p in fact.probabilities]
             elif fact.probabilities is not None:
@@ -62,6 +62,6 @@ class UncertaintyRecord:
         section = {"uncertain_facts": facts, "possible": scalar(self.space.count(robust=False)),
                    "robust": scalar(self.space.count(robust=True)), "decompositions": decompositions}
         if isinstance(self.space, ExpandedSpace):  # the world the tasks section was expanded in
-            section["world"] = [{"entity": f.entry.entity, "attribute": f.entry.attribute, "value": world_text(v)}
+            section["world"] = [{"entity": f.entry.entity, "attribute": f.entry.attribute, "value": value_text(v)}
                                 for f, v in zip(self.space.uncertainty.expanded, self.space.frame_world.world.values)]
         return section

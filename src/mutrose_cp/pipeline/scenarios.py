@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from typing import Mapping
 
 from ..errors import MissionError
-from ..model.uncertainty import UncertainFact, Value, scenario_probability
+from ..model.uncertainty import UncertainFact, Value, scenario_can_happen, value_text
 from .stages import MissionStages
 
 #: at most this many expansions of the mission, one per scenario of the facts the goal model reads
@@ -47,9 +47,7 @@ def world_scenarios(stages: MissionStages) -> list[tuple[Value, ...]]:
     assert uncertainty is not None
     facts = uncertainty.expanded
     joints = [j for j in uncertainty.joints if j.facts[0].read_by_goal]
-    known = all(f.probabilities is not None for f in facts)
-    scenarios = [s for s in itertools.product(*(f.values for f in facts))
-                 if not known or scenario_probability(facts, joints, s) > 0]
+    scenarios = [s for s in itertools.product(*(f.values for f in facts)) if scenario_can_happen(facts, joints, s)]
     if len(scenarios) > MAX_WORLDS:
         named = "; ".join(f"{f.text}: {f.read_by_goal}" for f in facts[:4]) + ("; ..." if len(facts) > 4 else "")
         raise MissionError(f"{len(facts)} uncertain facts that the goal model reads give {len(scenarios)} worlds to "
@@ -70,7 +68,7 @@ def scenario_worlds(stages: MissionStages) -> list[ScenarioWorld]:
                            if not any(f.entry.entity == e and f.entry.attribute == a for f in facts for e, a in j.facts))
     worlds = []
     for values in scenarios:
-        world = world_with(stages, {(f.entry.entity, f.entry.attribute): world_text(v) for f, v in zip(facts, values)})
+        world = world_with(stages, {(f.entry.entity, f.entry.attribute): value_text(v) for f, v in zip(facts, values)})
         worlds.append(ScenarioWorld(values, replace(world, uncertainty_entries=decided, uncertainty_joints=decided_joints)))
     return worlds
 
@@ -86,8 +84,3 @@ def world_with(stages: MissionStages, fields: Mapping[tuple[str, str], str], whe
                    report_warning=None)
 
 
-def world_text(value: Value) -> str:
-    """A value as a world file writes it: ``True``/``False``, or the number."""
-    if isinstance(value, bool):
-        return "True" if value else "False"
-    return f"{value:g}"

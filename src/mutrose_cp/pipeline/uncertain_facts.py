@@ -11,12 +11,12 @@ when it is, the expansion's world gives the domain the same value.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Iterable, Iterator
+from typing import Iterable, Iterator, NamedTuple
 
 from ..errors import MissionError, Problem, closest
 from ..model import Configuration, GoalModel, SemanticMapping, WorldKnowledge
 from ..model.expressions import Atom, BoolOp, Condition
-from ..model.uncertainty import Joint, JointEntry, UncertainEntry, UncertainFact, Uncertainty
+from ..model.uncertainty import AtomKey, Joint, JointEntry, UncertainEntry, UncertainFact, Uncertainty
 
 
 def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: Configuration,
@@ -27,7 +27,7 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
     problems: list[Problem] = []
     facts: list[UncertainFact] = []
     seen: set[tuple[str, tuple[str, ...]]] = set()
-    read = dict(goal_model_reads(goal_model))
+    read = _first_readings(goal_model)
     mappings = _AttributeMappings(config, sorts)
     for entry in entries:
         try:
@@ -57,6 +57,17 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
     by_atom = {f.atom: f for f in resolved}
     tables = [Joint(tuple(by_atom[f.atom] for f in j.facts), j.outcomes) for j in tables]
     return Uncertainty(source, resolved, tuple(tables))
+
+
+def _first_readings(goal_model: GoalModel) -> dict[str, GoalReading]:
+    """Each attribute the goal model reads: where first, and the kind of value, when some
+    condition tells (the first that does)."""
+    read: dict[str, GoalReading] = {}
+    for attribute, reading in goal_model_reads(goal_model):
+        first = read.setdefault(attribute, reading)
+        if not first.kind and reading.kind:
+            read[attribute] = first._replace(kind=reading.kind)
+    return read
 
 
 def _joints(joints: Iterable[JointEntry], facts: list[UncertainFact], problems: list[Problem]) -> list[Joint]:
@@ -92,22 +103,27 @@ def _joints(joints: Iterable[JointEntry], facts: list[UncertainFact], problems: 
     return tables
 
 
-def _goal_fact(entry: UncertainEntry, read: tuple[str, str], mappings: "_AttributeMappings",
+def _goal_fact(entry: UncertainEntry, read: "GoalReading", mappings: "_AttributeMappings",
                knowledge: WorldKnowledge | None) -> UncertainFact:
     """An entry whose attribute the goal model reads: the atom the domain reads it as, when the
-    configuration maps it, else the attribute itself; the entity must be a record of the world."""
-    goal, text = read
-    reader = f"goal {goal} reads {entry.attribute} ({text})"
+    configuration maps it for the entity's type, else the attribute itself; the entity must be a
+    record of the world, and the entry's kind (a probability of true, or numbers) the kind the
+    mapping, or else the goal model's condition, reads."""
+    reader = f"goal {read.goal} reads {entry.attribute} ({read.text})"
     entities = knowledge.entity_names if knowledge is not None else frozenset()  # read only when needed
     if entry.entity not in entities:
         guess = closest(entry.entity, sorted(entities))
         raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: the world has no record "
                                                 f"{entry.entity}" + (f" (did you mean {guess}?)" if guess else "")))
-    if mappings.by_name.get(entry.attribute):
-        try:
-            return replace(mappings.resolve(entry), read_by_goal=reader)
-        except MissionError:
-            pass  # mapped for other types only: the goal model alone reads it of this entity
+    mapped = mappings.mapping_for(entry)
+    if mapped is not None:  # else mapped for other types only: the goal model alone reads it of this entity
+        return replace(_fact(entry, *mapped), read_by_goal=reader)
+    if read.kind == "predicate" and entry.numeric:
+        raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: {reader} as a boolean: give "
+                                                '"probability" (of true), or nothing, not numeric values'))
+    if read.kind == "function" and not entry.numeric:
+        raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: {reader} as a number: give its "
+                                                'possible "values" or a "distribution", not a probability of true'))
     values = entry.values if entry.numeric else (False, True)
     assert values is not None
     return UncertainFact(entry, (entry.attribute, (entry.entity,)), entry.numeric, values, entry.probabilities,
@@ -125,6 +141,16 @@ class _AttributeMappings:
             if m.type == "attribute" and m.mapped_type in ("predicate", "function") and m.relates_to.lower() != "robot":
                 self.by_name.setdefault(m.name, []).append(m)
 
+    def mapping_for(self, entry: UncertainEntry) -> tuple[AtomKey, bool, str] | None:
+        """The atom the domain reads the entry's attribute of its entity as, whether it is a
+        function, and its name; None when no mapping of the attribute is for the entity's type."""
+        for m in self.by_name.get(entry.attribute, []):
+            hddl = self.config.type_mapping.get(m.relates_to)
+            if hddl is not None and entry.entity in self.sorts.get(hddl, frozenset()):
+                return (m.pred, (entry.entity,) * sum(1 for s in m.arg_sorts if s == hddl)), \
+                    m.mapped_type == "function", m.pred
+        return None
+
     def resolve(self, entry: UncertainEntry) -> UncertainFact:
         config, sorts = self.config, self.sorts
         mappings = self.by_name.get(entry.attribute, [])
@@ -134,11 +160,9 @@ class _AttributeMappings:
             raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: the configuration maps no "
                                                     f"attribute {entry.attribute} to a predicate or function"
                                                     + (f" (did you mean {guess}?)" if guess else "")))
-        for m in mappings:
-            hddl = config.type_mapping.get(m.relates_to)
-            if hddl is not None and entry.entity in sorts.get(hddl, frozenset()):
-                atom = (m.pred, (entry.entity,) * sum(1 for s in m.arg_sorts if s == hddl))
-                return _fact(entry, atom, m.mapped_type == "function", m.pred)
+        found = self.mapping_for(entry)
+        if found is not None:
+            return _fact(entry, *found)
         types = " or ".join(sorted({m.relates_to for m in mappings}))
         known = sorted({e for m in mappings for e in sorts.get(config.type_mapping.get(m.relates_to, ""), frozenset())})
         guess = closest(entry.entity, known)
@@ -146,7 +170,7 @@ class _AttributeMappings:
                                                 f"{entry.entity}" + (f" (did you mean {guess}?)" if guess else "")))
 
 
-def _fact(entry: UncertainEntry, atom: tuple[str, tuple[str, ...]], numeric: bool, name: str) -> UncertainFact:
+def _fact(entry: UncertainEntry, atom: AtomKey, numeric: bool, name: str) -> UncertainFact:
     boolean = not entry.numeric
     if numeric and boolean:
         raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute} is the function {name}: give its "
@@ -159,8 +183,18 @@ def _fact(entry: UncertainEntry, atom: tuple[str, tuple[str, ...]], numeric: boo
     return UncertainFact(entry, atom, numeric, values, entry.probabilities)
 
 
-def goal_model_reads(gm: GoalModel) -> Iterator[tuple[str, tuple[str, str]]]:
-    """(attribute, (goal id, condition text)) for each attribute a goal-model condition reads."""
+class GoalReading(NamedTuple):
+    """Where the goal model reads an attribute: the goal, its condition, and the kind of value
+    the condition reads (``predicate`` for a bare ``r.a``, ``function`` for a comparison of
+    order, ``""`` when it cannot tell: an equality, a membership, a right-hand side)."""
+
+    goal: str
+    text: str
+    kind: str
+
+
+def goal_model_reads(gm: GoalModel) -> Iterator[tuple[str, GoalReading]]:
+    """(attribute, where and how) for each attribute a goal-model condition reads."""
     for node in gm.nodes:
         conditions: list[tuple[Condition | None, str]] = []
         if node.query is not None:
@@ -173,9 +207,16 @@ def goal_model_reads(gm: GoalModel) -> Iterator[tuple[str, tuple[str, str]]]:
             conditions.append((node.context.condition, node.context.text))
         for condition, text in conditions:
             for atom in _atoms(condition):
-                for attribute in (atom.attribute, *_dotted(atom.value)):
-                    if attribute:
-                        yield attribute, (node.id, text)
+                if atom.attribute:
+                    yield atom.attribute, GoalReading(node.id, text, _kind(atom))
+                for attribute in _dotted(atom.value):
+                    yield attribute, GoalReading(node.id, text, "")
+
+
+def _kind(atom: Atom) -> str:
+    if atom.op is None:
+        return "predicate"
+    return "function" if atom.op in (">", "<", ">=", "<=") else ""
 
 
 def _atoms(condition: Condition | None) -> Iterator[Atom]:

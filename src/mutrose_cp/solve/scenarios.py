@@ -56,6 +56,7 @@ class WorldSpace:
     space: UncertainSpace | None
     problem: str = ""
     content: dict[int, int] = field(default_factory=dict)  # decomposition vertex -> content id
+    failed: bool = False  # the mission cannot be expanded there (an error), not merely has no task
 
     @property
     def stages(self) -> MissionStages:
@@ -111,7 +112,8 @@ class ExpandedSpace(UncertainSpace):
                                "list the robust ones (--robust) or the most likely (--most-likely), or count them")
         self.require_listed()
         frame = self.frame_world
-        assert frame.space is not None
+        if frame.space is None:  # no world has a task: no decomposition
+            return DecompositionSpace(self.encoding, [Component([], [], solutions=[], count=0)], self.var_to_dec)
         enc = frame.space.encoding
         dec_to_var = {d: v for v, d in frame.space.var_to_dec.items()}
         fixed = set(frame.space.fixed)
@@ -164,28 +166,15 @@ def expanded_space(stages: MissionStages) -> ExpandedSpace:
         if w.space is not None:
             w.space.require_listed()
     live = [w for w in worlds if w.live]
-    if not any(w.space is not None for w in worlds):
+    if all(w.failed for w in worlds):
         raise MissionError(f"the mission cannot be expanded in any world of its uncertain facts: {worlds[0].problem}")
-    keyed = {id(w): _keyed_components(w) for w in live}
-    shared = Counter(key for key, _ in keyed[id(live[0])]) if live else Counter()
-    for w in live[1:]:
-        shared &= Counter(key for key, _ in keyed[id(w)])
-    common: list[UncertainComponent] = []
-    differing: dict[int, list[UncertainComponent]] = {}
-    for n, w in enumerate(live):
-        left = Counter(shared)
-        differing[id(w)] = []
-        for key, comp in keyed[id(w)]:
-            if left[key] > 0:
-                left[key] -= 1
-                if n == 0:
-                    common.append(comp)
-            else:
-                differing[id(w)].append(comp)
+    common, apart = split_shared([_keyed_components(w) for w in live])
+    differing = {id(w): comps for w, comps in zip(live, apart)}
     varying = _varying(uncertainty, live, differing, len(common), len(live) == len(worlds))
-    frame = next((i for i, w in enumerate(worlds) if w.live), next(i for i, w in enumerate(worlds) if w.space))
-    base = worlds[frame].space
-    assert base is not None
+    frame = next((i for i, w in enumerate(worlds) if w.live),
+                 next((i for i, w in enumerate(worlds) if w.space), next(i for i, w in enumerate(worlds) if not w.failed)))
+    # no world has a task: the mission's decompositions are none, as when the world is known
+    base = worlds[frame].space or uncertain_space(worlds[frame].stages)
     return ExpandedSpace(base.encoding, uncertainty, [*common, varying], base.var_to_dec, worlds=worlds, frame=frame)
 
 
@@ -194,7 +183,7 @@ def _decided_world(world: ScenarioWorld, contents: dict[Hashable, int]) -> World
     try:
         tg = world.stages.task_graph
     except MissionError as err:
-        return WorldSpace(world, None, "; ".join(p.message for p in err.problems))
+        return WorldSpace(world, None, "; ".join(p.message for p in err.problems), failed=True)
     if not tg.tasks():
         return WorldSpace(world, None, "no entity of the world matched the queries: the mission has no task")
     space = uncertain_space(world.stages)
@@ -215,6 +204,35 @@ def _content_ids(tg: TaskGraph, contents: dict[Hashable, int]) -> dict[int, int]
     return ids
 
 
+def split_shared(keyed: list[list[tuple[ComponentKey, UncertainComponent]]]
+                 ) -> tuple[list[UncertainComponent], list[list[UncertainComponent]]]:
+    """The components every world has (by :func:`component_key`; the first world's copies),
+    and each world's others, where the worlds differ."""
+    shared = Counter(key for key, _ in keyed[0]) if keyed else Counter()
+    for components in keyed[1:]:
+        shared &= Counter(key for key, _ in components)
+    common: list[UncertainComponent] = []
+    differing: list[list[UncertainComponent]] = []
+    for n, components in enumerate(keyed):
+        left = Counter(shared)
+        differing.append([])
+        for key, comp in components:
+            if left[key] > 0:
+                left[key] -= 1
+                if n == 0:
+                    common.append(comp)
+            else:
+                differing[-1].append(comp)
+    return common, differing
+
+
+def component_key(facts: tuple[UncertainFact, ...], allowed: Mapping[Part, frozenset[Scenario]]) -> ComponentKey:
+    """A key equal for components that are the same in two worlds: the facts they read, and each
+    alternative with the scenarios that allow it.  The same alternatives allowed in other
+    scenarios are another component: shared, one world's scenarios would stand for every world's."""
+    return tuple(f.atom for f in facts), frozenset(allowed.items())
+
+
 def _keyed_components(w: WorldSpace) -> list[tuple[ComponentKey, UncertainComponent]]:
     """The world's components with content ids for parts, each with a key equal for components
     that are the same in two worlds: the facts they read and each alternative's scenarios.  The
@@ -225,8 +243,7 @@ def _keyed_components(w: WorldSpace) -> list[tuple[ComponentKey, UncertainCompon
         (("fixed", fixed), UncertainComponent(-1, (), {fixed: frozenset({()})}))]
     for c in w.space.components:
         allowed = {tuple(sorted(w.content[d] for d in part)): scenarios for part, scenarios in c.allowed.items()}
-        key = (tuple(f.atom for f in c.facts), frozenset(allowed.items()))
-        found.append((key, UncertainComponent(c.number, c.facts, allowed, joints=c.joints)))
+        found.append((component_key(c.facts, allowed), UncertainComponent(c.number, c.facts, allowed, joints=c.joints)))
     return found
 
 
@@ -294,4 +311,4 @@ def _bounded(component: UncertainComponent, live: list[WorldSpace], differing: d
     return component
 
 
-__all__ = ["ExpandedSpace", "WorldSpace", "decided_space", "expanded_space"]
+__all__ = ["ExpandedSpace", "WorldSpace", "component_key", "decided_space", "expanded_space", "split_shared"]

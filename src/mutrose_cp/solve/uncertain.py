@@ -34,7 +34,15 @@ from functools import cached_property
 from typing import Iterable, Iterator, Mapping, Sequence
 
 from ..errors import MissionError
-from ..model.uncertainty import AtomKey, Joint, UncertainFact, Uncertainty, Value, scenario_probability
+from ..model.uncertainty import (
+    AtomKey,
+    Joint,
+    UncertainFact,
+    Uncertainty,
+    Value,
+    scenario_can_happen,
+    scenario_probability,
+)
 from ..pipeline.stages import MissionStages
 from .boolean_model import Clause
 from .cpsat import (
@@ -80,6 +88,7 @@ class UncertainComponent:
 
     joints: tuple[Joint, ...] = ()  # the joint tables of its facts
     weights: dict[Scenario, float] = field(default_factory=dict, repr=False, compare=False)  # probability by scenario
+    happening: dict[Scenario, bool] = field(default_factory=dict, repr=False, compare=False)  # can_happen by scenario
 
     @cached_property
     def known(self) -> bool:
@@ -92,16 +101,19 @@ class UncertainComponent:
         return frozenset(f.atom for j in self.joints for f in j.facts)
 
     def can_happen(self, scenario: Scenario) -> bool:
-        """Whether ``scenario`` has a positive probability (every one does without probabilities)."""
-        return not self.known or self.scenario_probability(scenario) > 0
+        """Whether ``scenario`` can happen: no value of it has probability 0, whether or not
+        its other facts have probabilities (computed once per scenario)."""
+        happens = self.happening.get(scenario)
+        if happens is None:
+            happens = self.happening[scenario] = scenario_can_happen(self.facts, self.joints, scenario)
+        return happens
 
     @cached_property
     def scenarios(self) -> int:
-        """How many scenarios its facts can be in (of positive probability, when known)."""
-        if not self.known:
-            return math.prod(len(f.values) for f in self.facts)
-        count = math.prod(sum(1 for p in f.probabilities or () if p > 0) for f in self.facts
-                          if f.atom not in self.joined)
+        """How many scenarios its facts can be in: each value of a fact without probabilities,
+        each of positive probability of the others, and a joint table's outcomes."""
+        count = math.prod(len(f.values) if f.probabilities is None else sum(1 for p in f.probabilities if p > 0)
+                          for f in self.facts if f.atom not in self.joined)
         mine = {f.atom for f in self.facts}
         for j in self.joints:
             places = [i for i, f in enumerate(j.facts) if f.atom in mine]
@@ -254,7 +266,7 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
     uncertainty = stages.uncertainty
     assert uncertainty is not None and not uncertainty.expanded  # those: solve/scenarios.py
     tg = stages.task_graph
-    if tg.unique_branch:
+    if tg.unique_branch and tg.tasks():  # (a mission of no task has no decomposition either way)
         raise MissionError("the mission is unique-branch (spec semantics.md section 7.7), whose validity the "
                            "decomposer reads straight from the world: uncertain facts are not supported there")
     by_atom = {f.atom: f for f in uncertainty.facts}
@@ -321,7 +333,7 @@ def _decided(enc: Encoding, number: int, comp: Component, facts: Sequence[Uncert
              var_to_dec: Mapping[int, int], joints: Sequence[Joint]) -> UncertainComponent:
     listed = _pairs(solved)
     if listed is None:
-        return _bounded(enc, number, comp, facts, decoders, solved)
+        return _bounded(enc, number, comp, facts, decoders, solved, _joints_of(facts, joints))
     component = UncertainComponent(number, tuple(facts), {}, list(comp.choice_vars), joints=_joints_of(facts, joints))
     allowed: dict[Part, set[Scenario]] = {}
     for solution in listed:
@@ -334,11 +346,13 @@ def _decided(enc: Encoding, number: int, comp: Component, facts: Sequence[Uncert
 
 
 def _bounded(enc: Encoding, number: int, comp: Component, facts: Sequence[UncertainFact],
-             decoders: Mapping[UncertainFact, _Decoder], solved: Component) -> UncertainComponent:
+             decoders: Mapping[UncertainFact, _Decoder], solved: Component,
+             joints: Sequence[Joint]) -> UncertainComponent:
     """A component with too many (part, scenario) pairs to list, between bounds: its parts valid
-    in one scenario (each fact at its likeliest value, its first when none is) are possible, and
-    no other part is robust; the pairs, counted, bound the possible parts from above."""
-    likely = Component([*comp.records, *(c for f in facts for c in decoders[f].fixed(_likeliest(f)))],
+    in one scenario that can happen (:func:`_likeliest`) are possible, and no other part is
+    robust; the pairs, counted, bound the possible parts from above."""
+    likeliest = _likeliest(facts, joints)
+    likely = Component([*comp.records, *(c for f in facts for c in decoders[f].fixed(likeliest[f.atom]))],
                        list(comp.choice_vars))
     solve_components(enc.model, [likely], keep=False)
     why = (f"part {number + 1} of the mission has {solved.count} pairs of a decomposition and a scenario of its "
@@ -348,15 +362,23 @@ def _bounded(enc: Encoding, number: int, comp: Component, facts: Sequence[Uncert
                               bounds=(likely.count, solved.count, likely.count), unlisted=why)
 
 
+def _likeliest(facts: Sequence[UncertainFact], joints: Sequence[Joint]) -> dict[AtomKey, Value]:
+    """A scenario that can happen, by atom: each fact at its likeliest value (the first of the
+    likeliest; its first without probabilities), the facts of a joint table at its likeliest
+    outcome (their marginals' likeliest values may be a combination the table leaves out)."""
+    values: dict[AtomKey, Value] = {}
+    for fact in facts:
+        weights = fact.probabilities or (0.0,) * len(fact.values)
+        values[fact.atom] = fact.values[max(range(len(fact.values)), key=lambda i: (weights[i], -i))]
+    for joint in joints:
+        outcome, _ = max(joint.outcomes, key=lambda item: item[1])
+        values.update((f.atom, v) for f, v in zip(joint.facts, outcome))
+    return values
+
+
 def _joints_of(facts: Sequence[UncertainFact], joints: Sequence[Joint]) -> tuple[Joint, ...]:
     mine = {f.atom for f in facts}
     return tuple(j for j in joints if any(f.atom in mine for f in j.facts))
-
-
-def _likeliest(fact: UncertainFact) -> Value:
-    """The fact's likeliest value, the first of the likeliest (its first without probabilities)."""
-    weights = fact.probabilities or (0.0,) * len(fact.values)
-    return fact.values[max(range(len(fact.values)), key=lambda i: (weights[i], -i))]
 
 
 def _pairs(comp: Component) -> Iterator[frozenset[int]] | list[frozenset[int]] | None:
