@@ -94,7 +94,7 @@ def test_no_job_writes_the_manifest_or_the_results_file(tmp_path, capsys, output
 
 def _allocate(mission: Path, output: str, *options: str) -> dict:
     return {"command": "allocate", "inputs": [str(mission)],
-            "options": ["--fleet", str(mission / "fleet.json"), "--time-limit", "1", *options], "output": output}
+            "options": ["--fleet", str(mission / "fleet.json"), "--time-limit", "10", *options], "output": output}
 
 
 # two jobs writing one file, named by other options than -o or by none

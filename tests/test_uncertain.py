@@ -83,14 +83,15 @@ def ids(mission, decomposition) -> frozenset[str]:
 
 def content_keys(tg) -> dict[int, tuple]:
     """Each task decomposition by what it does, not by its task id: its goal-model task, HDDL
-    task, location, variable values and method path, and which of equal ones it is (a task whose
+    task, location, variable values, method path and actions, and which of equal ones it is (a task whose
     variable values do not tell its forAll copies apart has twins)."""
     seen: dict[tuple, int] = {}
     keys = {}
     for vertex in tg.decompositions():
         d = vertex.decomposition
         i = d.instance
-        key = (i.gm_task, i.name, str(i.location), tuple((p.hddl_param, str(p.value)) for p in i.parameters), d.number)
+        key = (i.gm_task, i.name, str(i.location), tuple((p.hddl_param, str(p.value)) for p in i.parameters), d.number,
+               tuple(a.name for a in d.path.actions))
         seen[key] = seen.get(key, 0) + 1
         keys[vertex.index] = (*key, seen[key])
     return keys
@@ -526,3 +527,56 @@ def test_components_are_shared_across_worlds_only_with_the_same_scenarios():
     assert common == [] and [[c.allowed for c in a] for a in apart] == [[first], [second]]
     common, apart = split_shared([keyed(first, second), keyed(dict(first))])
     assert [c.allowed for c in common] == [first] and [[c.allowed for c in a] for a in apart] == [[second], []]
+
+
+def test_a_recursion_repeated_by_a_number_the_goal_model_reads(tmp_path):
+    """RoomB holds 2 or 3 objects (the achieve condition reads the number, so each world expands
+    the recursion by its value): two picks empty the room in one world only, so no plan is
+    robust and each is valid with probability 0.5, against every world decomposed."""
+    from test_recursion import RECURSIVE_DOMAIN, WORLD
+    folder = tmp_path / "mission"
+    shutil.copytree(require_reference() / "missions" / "object-picking-function", folder,
+                    ignore=shutil.ignore_patterns("output"))
+    next((folder / "hddl").glob("*.hddl")).write_text(RECURSIVE_DOMAIN)
+    world = next((folder / "knowledge").glob("*.xml"))
+    world.write_text(WORLD)
+    (folder / "configuration" / "configuration.xml").unlink()
+    hddl, gm, config = (next((folder / d).iterdir()) for d in ("hddl", "gm", "configuration"))
+    entries: list[Entry] = [("RoomB", "num_objects", {2.0: 0.5, 3.0: 0.5})]
+    brute = BruteForce(hddl, gm, config, world, entries, identity=content)
+    assert len(brute.possible) == 2 and not brute.robust
+    mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries))
+    agree_expanded(mission, brute)
+
+
+def test_an_attribute_mapped_to_two_predicates_is_uncertain_in_both(tmp_path):
+    """Room202's lock read as door-locked (entering through the door) and as badge-needed
+    (entering with the nurse's badge): both atoms start with the one uncertain value, against
+    every world decomposed; a predicate and a function for one attribute is refused, located."""
+    folder = tmp_path / "mission"
+    shutil.copytree(ROOT / "examples" / "medication-round", folder)
+    hddl, gm, config = mission_files(folder)
+    data = json.loads(config.read_text())
+    del data["uncertainty"]
+    data["semantic_mapping"].append({"type": "attribute", "name": "door_locked", "relates_to": "Room",
+                                     "belongs_to": "world_db", "mapped_type": "predicate",
+                                     "map": {"pred": "badge-needed", "arg_sorts": ["room"]}})
+    config.write_text(json.dumps(data))
+    domain = hddl.read_text().replace("(door-locked ?rm - room)", "(door-locked ?rm - room)\n        (badge-needed ?rm - room)")
+    badge = domain.index("enter-with-nurse-badge")
+    hddl.write_text(domain[:badge] + domain[badge:].replace("(door-locked ?rm)", "(badge-needed ?rm)", 1))
+    world = folder / "knowledge" / "world_db.xml"
+    entries: list[Entry] = [("Room202", "door_locked", 0.2), ("Room203", "patient_present", 0.6)]
+    brute = BruteForce(hddl, gm, config, world, entries)
+    assert len(brute.possible) == 4
+    mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries))
+    assert mission.uncertainty.facts[0].atoms == (("door-locked", ("Room202",)), ("badge-needed", ("Room202",)))
+    agree(mission, brute)
+    data["semantic_mapping"].append({"type": "attribute", "name": "door_locked", "relates_to": "Room",
+                                     "belongs_to": "world_db", "mapped_type": "function",
+                                     "map": {"pred": "locks", "arg_sorts": ["room"]}})
+    config.write_text(json.dumps(data))
+    hddl.write_text(hddl.read_text().replace("    (:capabilities", "    (:functions (locks ?rm - room))\n\n    (:capabilities"))
+    with pytest.raises(MissionError, match="u.json:1:.*Room202.door_locked is mapped to the predicate door-locked and "
+                                           "the predicate badge-needed and the function locks"):
+        Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries)).uncertainty

@@ -310,6 +310,8 @@ def test_bad_joint_tables_are_located(mission, capsys, tmp_path):
         ({"uncertain": [door, patient], "joint": [{"facts": [door, patient], "outcomes": [
             {"values": [True, 2], "probability": 1}]}]}, "gives patient-present(Room203) a value it cannot take"),
         ({"uncertain": [door, patient], "joint": [{"facts": [door], "outcomes": []}]}, "two or more"),
+        ({"uncertain": [door], "joint": [{"facts": [door, door], "outcomes": [
+            {"values": [True, False], "probability": 1}]}]}, "joint[0].facts[1]: Room202.door_locked is listed twice"),
     ]
     for document, message in cases:
         bad.write_text(json.dumps(document, indent=1))
@@ -462,3 +464,53 @@ def test_a_mission_with_no_task_in_any_world_has_no_decomposition(tmp_path, caps
                              str(tmp_path / "x.json"))
         assert status == 3 and "no mission decomposition is valid" in err and "Traceback" not in err, err
         assert not (tmp_path / "x.json").exists()
+
+
+def test_equal_probabilities_tie_as_written_and_the_cheaper_plan_wins(tmp_path, capsys):
+    """Entering Room202 through its door is valid with probability 0.95 (unlocked), with the
+    nurse's badge with 0.08 + 0.87 (a lock state above 0), which in floating point is
+    0.9500000000000001: equal as written, so the tie goes to the cheaper plan, the door's (two
+    actions, not three)."""
+    folder = tmp_path / "m"
+    shutil.copytree(EXAMPLE, folder)
+    config = folder / "configuration" / "configuration.json"
+    data = json.loads(config.read_text())
+    data["semantic_mapping"].append({"type": "attribute", "name": "lock_state", "relates_to": "Room",
+                                     "belongs_to": "world_db", "mapped_type": "function",
+                                     "map": {"pred": "lockstate", "arg_sorts": ["room"]}})
+    config.write_text(json.dumps(data))
+    hddl = folder / "hddl" / "medication-round.hddl"
+    domain = hddl.read_text().replace("    (:capabilities", "    (:functions (lockstate ?rm - room))\n\n    (:capabilities")
+    badge = domain.index("(:method enter-with-nurse-badge")
+    hddl.write_text(domain[:badge] + domain[badge:].replace("(door-locked ?rm)", "(> (lockstate ?rm) 0)", 1))
+    world = folder / "knowledge" / "world_db.xml"
+    world.write_text(world.read_text().replace("</name>", "</name><lock_state>1</lock_state>"))
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room202", "attribute": "door_locked", "probability": 0.05},
+        {"entity": "Room202", "attribute": "lock_state", "distribution": {"0": 0.05, "1": 0.08, "2": 0.87}}]})
+    plan = tmp_path / "plan.json"
+    assert run(capsys, "decompose", str(folder), "--uncertain", str(u), "--most-likely", "-o", str(plan), "-q")[0] == 0
+    written = json.loads(plan.read_text())
+    assert written["mission_decomposition_uncertainty"]["decompositions"][0]["probability"] == "0.95"
+    chosen = [written["tasks"][k] for k in written["mission_decompositions"][0]]
+    room202 = next(t for t in chosen if t["locations"] == "Room202" and t["name"] == "EnterRoom")
+    assert [a["name"] for a in room202["decomposition"].values()] == ["navigate", "pass-door"], room202
+
+
+def test_counts_exit_status_follows_the_worlds_not_the_world_as_written(tmp_path, capsys):
+    """No room needs disinfection but perhaps Room101, which is occupied: the world where it does
+    has tasks and no valid decomposition, so count exits 3 (as decompose would), whatever the
+    world file says of the uncertain fact."""
+    for written in ("False", "True"):
+        folder = hospital_copy(tmp_path / written)
+        world = folder / "knowledge" / "world_db.xml"
+        text = world.read_text().replace("<needs_disinfection>True</needs_disinfection>",
+                                         "<needs_disinfection>False</needs_disinfection>")
+        first = text.index("<name>Room101</name>")
+        head, tail = text[:first], text[first:]
+        tail = tail.replace("<needs_disinfection>False</needs_disinfection>",
+                            f"<needs_disinfection>{written}</needs_disinfection>", 1)
+        world.write_text(head + tail.replace("<occupied>False</occupied>", "<occupied>True</occupied>", 1))
+        u = write_json(tmp_path / f"u-{written}.json", {"uncertain": [
+            {"entity": "Room101", "attribute": "needs_disinfection", "probability": 0.5}]})
+        assert run(capsys, "count", str(folder), "--uncertain", str(u), "-q")[:2] == (3, "0\n"), written

@@ -568,8 +568,11 @@ def _count_uncertain(args: argparse.Namespace, mission: Mission, start: float) -
              line, mission)
     sys.stderr.flush()
     print(low if low == high else f"{low}..{high}")  # the bare count, or its bounds, is the last line
-    # no robust decomposition is an answer; none valid for any value of the facts is status 3
-    return 3 if possible[1] == 0 and mission.task_graph.tasks() else 0
+    # no robust decomposition is an answer; none valid for any value of the facts is status 3,
+    # unless the mission has no task (in any world it is expanded in: not the one as written)
+    has_tasks = any(w.space is not None for w in space.worlds) if isinstance(space, ExpandedSpace) \
+        else bool(mission.task_graph.tasks())
+    return 3 if possible[1] == 0 and has_tasks else 0
 
 
 def cmd_compare(args: argparse.Namespace) -> int:

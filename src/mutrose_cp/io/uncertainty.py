@@ -85,10 +85,14 @@ class _Reader:
                     for f in facts):
                 self.problem((*path, "facts"), 'expected a list of two or more {"entity": ..., "attribute": ...}')
                 continue
+            names = [(f["entity"].strip(), f["attribute"].strip()) for f in facts]
+            twice = next((i for i, name in enumerate(names) if name in names[:i]), None)
+            if twice is not None:
+                self.problem((*path, "facts", twice), f"{names[twice][0]}.{names[twice][1]} is listed twice in this table")
+                continue
             outcomes = self.outcomes(table["outcomes"], (*path, "outcomes"), len(facts))
             if outcomes is not None:
-                found.append(JointEntry(tuple((f["entity"].strip(), f["attribute"].strip()) for f in facts), outcomes,
-                                        self.doc.at(path)))
+                found.append(JointEntry(tuple(names), outcomes, self.doc.at(path)))
         return found
 
     def outcomes(self, listed: Any, path: Path, size: int) -> tuple[tuple[tuple[Value, ...], float], ...] | None:

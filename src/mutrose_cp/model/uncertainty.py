@@ -60,6 +60,14 @@ class UncertainFact:
     probabilities: tuple[float, ...] | None  # aligned with ``values``; None when not given
     # the goal and condition that read it, when the goal model does (then it is expanded)
     read_by_goal: str = ""
+    # the other atoms the configuration maps the same attribute to (``door_locked`` read as
+    # ``door-locked(Room202)`` and ``badge-needed(Room202)``): they start with the same value
+    aliases: tuple[AtomKey, ...] = ()
+
+    @property
+    def atoms(self) -> tuple[AtomKey, ...]:
+        """Every atom the domain reads the fact as."""
+        return (self.atom, *self.aliases)
 
     @property
     def text(self) -> str:
@@ -90,6 +98,17 @@ class Joint:
         """The probability that the facts of ``values`` (some of this table's) have those values."""
         return math.fsum(p for outcome, p in self.outcomes
                          if all(values.get(f.atom, v) == v for f, v in zip(self.facts, outcome)))
+
+
+#: probabilities are written, and compared for ties, to this many significant digits: sums of
+#: products of decimal probabilities carry float error (0.08 + 0.87 is not 0.95), which must
+#: neither break a tie nor print differently from machine to machine
+PROBABILITY_DIGITS = 12
+
+
+def rounded_probability(p: float) -> float:
+    """``p`` to :data:`PROBABILITY_DIGITS` significant digits: what is written, and compared."""
+    return float(f"{p:.{PROBABILITY_DIGITS}g}")
 
 
 def value_text(value: Value) -> str:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Iterable, Iterator
 
-from ..model.uncertainty import value_text
+from ..model.uncertainty import PROBABILITY_DIGITS, value_text
 from ..solve.scenarios import ExpandedSpace
 from ..solve.uncertain import Judgement, UncertainSpace
 
@@ -18,7 +18,7 @@ from ..solve.uncertain import Judgement, UncertainSpace
 def shown_probability(p: float) -> str:
     """A probability as the output writes it: 12 significant digits, so that sums of products
     print the same on every machine."""
-    return f"{p:.12g}"
+    return f"{p:.{PROBABILITY_DIGITS}g}"
 
 
 class UncertaintyRecord:

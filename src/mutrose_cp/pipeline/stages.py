@@ -69,7 +69,7 @@ class MissionStages:
         world of each expansion (``pipeline/scenarios.py``)."""
         state = build_initial_state(self.domain, self.config, self.knowledge)
         if self.uncertainty is not None:
-            state = state.forgetting({f.atom for f in self.uncertainty.decided})
+            state = state.forgetting({atom for f in self.uncertainty.decided for atom in f.atoms})
         return state
 
     @cached_property

@@ -36,11 +36,12 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
         except MissionError as err:
             problems.extend(err.problems)
             continue
-        if fact.atom in seen:
-            problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute} is the fact {fact.text}, "
-                                                 "already uncertain by an earlier entry"))
+        taken = next((atom for atom in fact.atoms if atom in seen), None)
+        if taken is not None:
+            problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute} is the fact "
+                                                 f"{taken[0]}({', '.join(taken[1])}), already uncertain by an earlier entry"))
             continue
-        seen.add(fact.atom)
+        seen.update(fact.atoms)
         facts.append(fact)
     tables = _joints(joints, facts, problems)
     for table in tables:
@@ -141,15 +142,26 @@ class _AttributeMappings:
             if m.type == "attribute" and m.mapped_type in ("predicate", "function") and m.relates_to.lower() != "robot":
                 self.by_name.setdefault(m.name, []).append(m)
 
-    def mapping_for(self, entry: UncertainEntry) -> tuple[AtomKey, bool, str] | None:
-        """The atom the domain reads the entry's attribute of its entity as, whether it is a
-        function, and its name; None when no mapping of the attribute is for the entity's type."""
+    def mapping_for(self, entry: UncertainEntry) -> tuple[tuple[AtomKey, ...], bool, str] | None:
+        """The atoms the domain reads the entry's attribute of its entity as (every mapping of
+        the attribute for the entity's type: each starts with the fact's value), whether they are
+        functions, and the first one's name; None when no mapping is for the entity's type.  An
+        attribute mapped to a predicate and to a function is refused: one value cannot be both."""
+        found: list[tuple[AtomKey, SemanticMapping]] = []
         for m in self.by_name.get(entry.attribute, []):
             hddl = self.config.type_mapping.get(m.relates_to)
             if hddl is not None and entry.entity in self.sorts.get(hddl, frozenset()):
-                return (m.pred, (entry.entity,) * sum(1 for s in m.arg_sorts if s == hddl)), \
-                    m.mapped_type == "function", m.pred
-        return None
+                atom = (m.pred, (entry.entity,) * sum(1 for s in m.arg_sorts if s == hddl))
+                if all(atom != earlier for earlier, _ in found):
+                    found.append((atom, m))
+        if not found:
+            return None
+        kinds = {m.mapped_type for _, m in found}
+        if len(kinds) > 1:
+            names = " and ".join(f"the {m.mapped_type} {m.pred}" for _, m in found)
+            raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute} is mapped to {names}: one "
+                                                    "uncertain value cannot be both a truth value and a number"))
+        return tuple(atom for atom, _ in found), found[0][1].mapped_type == "function", found[0][1].pred
 
     def resolve(self, entry: UncertainEntry) -> UncertainFact:
         config, sorts = self.config, self.sorts
@@ -170,7 +182,7 @@ class _AttributeMappings:
                                                 f"{entry.entity}" + (f" (did you mean {guess}?)" if guess else "")))
 
 
-def _fact(entry: UncertainEntry, atom: AtomKey, numeric: bool, name: str) -> UncertainFact:
+def _fact(entry: UncertainEntry, atoms: tuple[AtomKey, ...], numeric: bool, name: str) -> UncertainFact:
     boolean = not entry.numeric
     if numeric and boolean:
         raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute} is the function {name}: give its "
@@ -180,7 +192,7 @@ def _fact(entry: UncertainEntry, atom: AtomKey, numeric: bool, name: str) -> Unc
                                                 '"probability" (of true), or nothing, not numeric values'))
     values = (False, True) if boolean else entry.values
     assert values is not None
-    return UncertainFact(entry, atom, numeric, values, entry.probabilities)
+    return UncertainFact(entry, atoms[0], numeric, values, entry.probabilities, aliases=atoms[1:])
 
 
 class GoalReading(NamedTuple):

@@ -100,16 +100,22 @@ class Encoder(EncodingState):
 
     def __init__(self, tg: TaskGraph, constraints: Sequence[Constraint], domain: Domain, gm: GoalModel,
                  config: Configuration, initial: InitialState, explain: bool = False, replay: bool = True,
-                 uncertain: Collection[AtomKey] = (), uncertain_numbers: Mapping[AtomKey, Sequence[float]] | None = None) -> None:
+                 uncertain: Collection[AtomKey] = (), uncertain_numbers: Mapping[AtomKey, Sequence[float]] | None = None,
+                 uncertain_aliases: Mapping[AtomKey, AtomKey] | None = None) -> None:
         super().__init__(tg, constraints, domain, gm, config, initial, explain,
                          model=BoolModel(namer=functools.partial(variable_name, tg)))
         # stamped copies replay a leader's records (.replay); explaining labels every record by
         # its own vertices, so it encodes each copy in full, and so does a mission with uncertain
         # facts (a copy's class does not say which of its atoms are uncertain)
-        self.number_values: Mapping[AtomKey, Sequence[float]] = uncertain_numbers or {}
+        # an atom that starts as an uncertain fact does, which it shares its variables with (one
+        # world attribute the configuration maps to several predicates or functions)
+        self.aliases: Mapping[AtomKey, AtomKey] = uncertain_aliases or {}
+        self.number_values: dict[AtomKey, Sequence[float]] = dict(uncertain_numbers or {})
+        self.number_values.update((alias, self.number_values[atom]) for alias, atom in self.aliases.items()
+                                  if atom in self.number_values)
         self._replaying = replay and not explain and not uncertain and not self.number_values
         # boolean facts whose start value is a free variable, made when first read
-        self.uncertain_atoms = frozenset(uncertain)
+        self.uncertain_atoms = frozenset(uncertain) | {alias for alias, atom in self.aliases.items() if atom in uncertain}
         self.uncertain: dict[AtomKey, int] = {}
         # numbers whose start value is one of a few, chosen by variables made when first read:
         # the choices, and the integer variable equal to the chosen value
@@ -275,6 +281,7 @@ class Encoder(EncodingState):
 
     def _uncertain(self, atom: AtomKey) -> int:
         """The variable of an uncertain fact's start value: known, but not to the decomposer."""
+        atom = self.aliases.get(atom, atom)
         if atom not in self.uncertain:
             self.uncertain[atom] = self.m.new_bool((UNCERTAIN, atom, -1, None))
         return self.uncertain[atom]
@@ -282,6 +289,7 @@ class Encoder(EncodingState):
     def _uncertain_number(self, atom: AtomKey) -> tuple[tuple[int, ...], int]:
         """An uncertain number's choices (one per value it may start with, exactly one true) and
         the integer variable equal to the chosen value: a chain of assignments, one per choice."""
+        atom = self.aliases.get(atom, atom)
         if atom not in self.uncertain_numbers:
             values = self.number_values[atom]
             choices = tuple(self.m.new_bool((UNCERTAIN, atom, -1, v)) for v in values)

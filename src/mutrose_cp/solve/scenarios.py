@@ -5,7 +5,8 @@ Each world of ``pipeline/scenarios.py`` is decided as any mission with uncertain
 (:func:`mutrose_cp.solve.uncertain.uncertain_space`).  Across worlds a decomposition is known by
 its content, not by its task ids (a world where a room needs no disinfection numbers the
 others' tasks differently): a task decomposition is the goal-model task, the HDDL task, its
-location and variable values, and the method path chosen, the n-th of equal ones in a world.
+location and variable values, the method path chosen and the steps it expands to (a recursion
+repeats as often as the world's value says), the n-th of equal ones in a world.
 
 Most of a mission is the same in every world: its components are equal, content for content,
 with the same alternatives allowed in the same scenarios of the facts they read.  Those are
@@ -18,7 +19,7 @@ some does, the probability a sum over scenarios, products across components, and
 sense first, now among the facts the goal model reads as well.
 
 Decompositions are written in the task ids of one world, the *frame*: a robust decomposition
-exists in every world; the most likely one in the likeliest world where it is valid.  The
+exists in every world; the most likely one in the world where it is most likely valid.  The
 possible decompositions of different worlds cannot be listed in one output, so only counted.
 """
 from __future__ import annotations
@@ -32,7 +33,7 @@ from typing import Callable, Hashable, Iterable, Iterator, Mapping
 
 from ..errors import MissionError
 from ..model.task_graph import TaskGraph
-from ..model.uncertainty import UncertainFact, Uncertainty, Value
+from ..model.uncertainty import UncertainFact, Uncertainty, Value, rounded_probability
 from ..pipeline.scenarios import ScenarioWorld, scenario_worlds
 from ..pipeline.stages import MissionStages
 from .cpsat import Component, DecompositionSpace
@@ -142,7 +143,7 @@ class ExpandedSpace(UncertainSpace):
 
     def most_likely(self, costs: Mapping[int, int]) -> tuple[list[int], float]:
         """The decomposition most likely to be valid (``costs`` by content id, see
-        :meth:`content_costs`), in the task ids of the likeliest world where it is valid, which
+        :meth:`content_costs`), in the task ids of the world where it is most likely valid, which
         becomes the frame."""
         parts, probability = self.likeliest_parts(costs)
         best = parts[-1]
@@ -151,7 +152,7 @@ class ExpandedSpace(UncertainSpace):
         weight = {i: math.fsum(varying.scenario_probability(s) for s in varying.allowed[best]
                                if s[:expanded] == w.world.values)
                   for i, w in enumerate(self.worlds) if w.live}
-        self.frame = max(weight, key=lambda i: (weight[i], -i))
+        self.frame = max(weight, key=lambda i: (rounded_probability(weight[i]), -i))
         vertex_of = self.frame_world.vertex_of
         return sorted(vertex_of[d] for p in parts for d in p), probability
 
@@ -192,13 +193,16 @@ def _decided_world(world: ScenarioWorld, contents: dict[Hashable, int]) -> World
 
 def _content_ids(tg: TaskGraph, contents: dict[Hashable, int]) -> dict[int, int]:
     """Each task decomposition's id by content, shared by every world: its goal-model task, HDDL
-    task, location, variable values and method path, and which of equal ones it is."""
+    task, location, variable values, method path and the steps it expands to (a recursion
+    repeats as often as a world's value says: two picks in one world are not three in another),
+    and which of equal ones it is."""
     seen: Counter[Hashable] = Counter()
     ids = {}
     for vertex in tg.decompositions():
         d = vertex.decomposition
         inst = d.instance
-        key: Hashable = (inst.gm_task, inst.name, inst.location, inst.parameters, d.number)
+        steps = tuple((s.name, s.args) for s in d.path.steps)
+        key: Hashable = (inst.gm_task, inst.name, inst.location, inst.parameters, d.number, steps)
         seen[key] += 1
         ids[vertex.index] = contents.setdefault((key, seen[key]), len(contents))
     return ids

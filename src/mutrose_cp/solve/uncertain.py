@@ -40,6 +40,7 @@ from ..model.uncertainty import (
     UncertainFact,
     Uncertainty,
     Value,
+    rounded_probability,
     scenario_can_happen,
     scenario_probability,
 )
@@ -240,8 +241,8 @@ class UncertainSpace:
             if not c.allowed:
                 raise MissionError("no decomposition is valid in any scenario")
 
-            def key(p: Part, c: UncertainComponent = c) -> tuple[float, int]:
-                return -(c.probability(p) or 0.0), sum(costs.get(d, 0) for d in p)
+            def key(p: Part, c: UncertainComponent = c) -> tuple[float, int]:  # equal as written: a tie
+                return -rounded_probability(c.probability(p) or 0.0), sum(costs.get(d, 0) for d in p)
             best = min(c.allowed, key=key)  # the first of the listing order among equals
             parts.append(best)
             probability *= c.probability(best) or 0.0
@@ -270,14 +271,16 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
         raise MissionError("the mission is unique-branch (spec semantics.md section 7.7), whose validity the "
                            "decomposer reads straight from the world: uncertain facts are not supported there")
     by_atom = {f.atom: f for f in uncertainty.facts}
-    read_by_recursion = stages.initial_state.forgotten_reads() & {f.atom for f in uncertainty.facts if f.numeric}
+    atom_of = {atom: f.atom for f in uncertainty.facts for atom in f.atoms}
+    read_by_recursion = stages.initial_state.forgotten_reads() & {a for f in uncertainty.facts if f.numeric for a in f.atoms}
     if read_by_recursion:
-        fact = by_atom[min(read_by_recursion)]
+        fact = by_atom[atom_of[min(read_by_recursion)]]
         raise MissionError(f"{fact.entry.where}: {fact.text} is read by a recursive method to know how often it "
                            "repeats, so the task decompositions would differ from value to value: it cannot be uncertain")
     enc = Encoder(tg, stages.constraints, stages.domain, stages.goal_model, stages.config, stages.initial_state,
                   uncertain=[f.atom for f in uncertainty.facts if not f.numeric],
-                  uncertain_numbers={f.atom: [float(v) for v in f.values] for f in uncertainty.facts if f.numeric}).encode()
+                  uncertain_numbers={f.atom: [float(v) for v in f.values] for f in uncertainty.facts if f.numeric},
+                  uncertain_aliases={alias: f.atom for f in uncertainty.facts for alias in f.aliases}).encode()
     # each fact's variables, read as its value (a boolean's one variable; a number's choices)
     decoders = {by_atom[atom]: _Decoder((v,), (True,)) for atom, v in enc.uncertain.items()}
     decoders.update((by_atom[atom], _Decoder(choices, by_atom[atom].values))
@@ -423,8 +426,8 @@ def sensing(space: UncertainSpace) -> Sensing:
     for c in space.components:
         settled = _smallest_settling(c)
         if settled is None:
-            hopeless = next(s for s in scenarios(c.facts)
-                            if c.can_happen(s) and not any(s in allowed for allowed in c.allowed.values()))
+            hopeless = next((s for s in scenarios(c.facts)
+                             if c.can_happen(s) and not any(s in allowed for allowed in c.allowed.values())), ())
             values = ", ".join(f.shown(v) for f, v in zip(c.facts, hopeless)) or "whatever the facts are"
             chosen, reason = None, f"no decomposition is valid when {values}: sensing cannot settle the mission"
             break
@@ -446,7 +449,7 @@ def sensing(space: UncertainSpace) -> Sensing:
                                       for p in c.allowed), default=0.0) for value in fact.values)
             gains.append((fact, expected * others))
     order = {f.atom: i for i, f in enumerate(space.uncertainty.facts)}
-    gains.sort(key=lambda item: (-item[1], order[item[0].atom]))
+    gains.sort(key=lambda item: (-rounded_probability(item[1]), order[item[0].atom]))
     return Sensing(facts, best, tuple(gains), reason)
 
 
