@@ -514,3 +514,59 @@ def test_counts_exit_status_follows_the_worlds_not_the_world_as_written(tmp_path
         u = write_json(tmp_path / f"u-{written}.json", {"uncertain": [
             {"entity": "Room101", "attribute": "needs_disinfection", "probability": 0.5}]})
         assert run(capsys, "count", str(folder), "--uncertain", str(u), "-q")[:2] == (3, "0\n"), written
+
+
+def test_odd_values_in_the_uncertainty_file_are_located_once(tmp_path, capsys):
+    """A number too large for a float, the unique id as an attribute, an entry given twice (one
+    problem, not two), a robot's attribute, true against 1 in a joint table, a distribution key
+    that only Python reads as a number, and a huge probability quoted short."""
+    huge = "1" + "0" * 400
+    text = ('{"uncertain": [\n'
+            f'{{"entity": "Room202", "attribute": "door_locked", "values": [0, {huge}]}},\n'
+            '{"entity": "Room202", "attribute": "name", "probability": 0.5},\n'
+            '{"entity": "Room203", "attribute": "patient_present"},\n'
+            '{"entity": "Room203", "attribute": "patient_present"},\n'
+            '{"entity": "Room201", "attribute": "stock", "distribution": {"1_0": 0.5, "2": 0.5}},\n'
+            f'{{"entity": "Room204", "attribute": "door_locked", "probability": {huge}}}\n'
+            '],\n"joint": [{"facts": [{"entity": "Room203", "attribute": "patient_present"}, '
+            '{"entity": "Room205", "attribute": "door_locked"}], "outcomes": [{"values": [true, true], "probability": 0.5}, '
+            f'{{"values": [1, 1], "probability": 0.5}}, {{"values": [true, {huge}], "probability": 0}}]}}]}}')
+    bad = tmp_path / "bad.json"
+    bad.write_text(text)
+    status, _, err = run(capsys, "check", str(EXAMPLE), "--uncertain", str(bad))
+    assert status == 2 and "Traceback" not in err, err
+    assert f"{bad}:2:" in err and "uncertain[0].values[1]: expected a number, not 1000000000000000000000000000000000000..." in err
+    assert f"{bad}:3:" in err and "Room202.name: name is the unique id that names the entity" in err
+    assert err.count("Room203.patient_present is already uncertain") == 1
+    assert f"{bad}:6:" in err and "'1_0' is not a number" in err
+    assert f"{bad}:7:" in err and "expected a probability between 0 and 1, not 1000000000000000000000000000000000000..." in err
+    assert "joint[0].outcomes[2]: expected" in err  # the huge number: not a value
+    table = write_json(tmp_path / "t.json", {"uncertain": [{"entity": "Room203", "attribute": "patient_present"},
+                                                           {"entity": "Room202", "attribute": "door_locked"}],
+                                             "joint": [{"facts": [{"entity": "Room203", "attribute": "patient_present"},
+                                                                  {"entity": "Room202", "attribute": "door_locked"}],
+                                                        "outcomes": [{"values": [True, True], "probability": 0.5},
+                                                                     {"values": [1, 1], "probability": 0.5}]}]})
+    status, _, err = run(capsys, "check", str(EXAMPLE), "--uncertain", str(table))
+    assert status == 2 and "listed twice" not in err and "a value it cannot take" in err, err
+    robot = write_json(tmp_path / "r.json", {"uncertain": [{"entity": "Room101", "attribute": "is_loaded"}]})
+    status, _, err = run(capsys, "check", str(HOSPITAL), "--uncertain", str(robot))
+    assert status == 2 and "maps is_loaded only for robots" in err and "did you mean" not in err, err
+
+
+def test_commands_that_read_the_world_as_written_say_so(mission, capsys, tmp_path):
+    """The configuration names an uncertainty file: validate, export-hddl and graph read the world
+    as written and say so; graph --from-output of an output expanded in a world says that one."""
+    plain = tmp_path / "plain.json"
+    assert run(capsys, "decompose", str(mission), "--as-written", "-o", str(plain), "-q")[0] == 0
+    said = "this command does not read the uncertainty file"
+    assert said in run(capsys, "validate", str(mission), str(plain))[2]
+    assert said in run(capsys, "export-hddl", str(mission), "-o", str(tmp_path / "d.hddl"))[2]
+    assert said in run(capsys, "graph", str(mission), "--view", "decomposition", "--from-output", str(plain), "-o",
+                       str(tmp_path / "p.dot"))[2]
+    plan = tmp_path / "plan.json"
+    orders = str(mission / "knowledge" / "uncertain-orders.json")
+    assert run(capsys, "decompose", str(mission), "--uncertain", orders, "--most-likely", "-o", str(plan), "-q")[0] == 0
+    status, _, err = run(capsys, "graph", str(mission), "--view", "decomposition", "--from-output", str(plan), "-o",
+                         str(tmp_path / "w.dot"))
+    assert status == 0 and said not in err and f"drawn in the world {plan} was expanded in" in err

@@ -23,7 +23,15 @@ from ..mission import Mission
 from ..pipeline.scenarios import world_scenarios
 from ..pipeline.stages import MissionStages
 from ..output.files import STDOUT, refuse_unsafe_outputs, staged_outputs
-from .flow import expanded, load_mission, mission_paths, read_uncertainty, refuse_outputs, report_warnings
+from .flow import (
+    expanded,
+    load_mission,
+    mission_paths,
+    read_uncertainty,
+    refuse_outputs,
+    report_warnings,
+    warn_world_as_written,
+)
 from .process import keep_until_exit
 from ..solve.decompose import DEFAULT_LIMIT, Algorithm, DecompositionRequest, DecompositionResult, cpsat_options
 from ..solve.optimize import CostModel
@@ -265,6 +273,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
     if output.assumed_world and not args.quiet:
         print(f"note: checked in the world the output was expanded in: "
               f"{', '.join(f'{e}.{a} = {v}' for e, a, v in output.assumed_world)}", file=sys.stderr)
+    elif not args.quiet:
+        warn_world_as_written(mission)
     progress = _Progress(not args.quiet, "mission decompositions checked")
     report = validate(world.domain, world.goal_model, world.config, world.initial_state, output,
                       world=world.knowledge, progress=progress)
@@ -490,7 +500,7 @@ def cmd_graph(args: argparse.Namespace) -> int:
         raise MissionError("--from-output draws a decomposition: give it with --view decomposition")
     hddl, gm, cfg, _folder = mission_paths(args)
     start = time.perf_counter()
-    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet)
+    mission = load_mission(hddl, gm, cfg, lenient_xml=args.lenient_xml, quiet=args.quiet, world_said_later=True)
     refuse_outputs(render_targets(args.output), mission, (hddl, gm, cfg, *([args.from_output] if args.from_output else [])))
     chosen = None
     drawn: MissionStages = mission
@@ -498,6 +508,10 @@ def cmd_graph(args: argparse.Namespace) -> int:
         from ..validate.listed import listed_decomposition
 
         drawn, chosen = listed_decomposition(mission, args.from_output, args.index)
+    if drawn is not mission and not args.quiet:
+        print(f"note: drawn in the world {args.from_output} was expanded in", file=sys.stderr)
+    elif not args.quiet:
+        warn_world_as_written(mission)
     result = render(view_dot(drawn, args.view, args.index, chosen=chosen, source=args.from_output or ""), args.output)
     if result.message:
         print(result.message, file=sys.stderr)
@@ -593,6 +607,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
             raise MissionError("--original: not an executable file (the original tool, run as PATH HDDL GM CONFIG)",
                                args.original)
         original = Path(found).resolve()
+    if not args.quiet:
+        warn_world_as_written(Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml))
     request = CompareRequest(hddl, gm, cfg, time_limit=args.time_limit, limit=args.limit or None, original=original,
                              lenient_xml=args.lenient_xml, max_input_mb=args.max_input_mb)
     report = compare(request, None if args.quiet else lambda message: print(message, file=sys.stderr))

@@ -19,6 +19,7 @@ from ..io.hddl_writer import HddlExport
 from ..mission import Mission
 from ..io.mission_files import find_mission_files
 from ..output.files import STDOUT, atomic_writer, refuse_unsafe_outputs, staged_outputs
+from .flow import warn_world_as_written
 
 
 def _mission_files(args: argparse.Namespace) -> tuple[Path, tuple[Path, Path] | None]:
@@ -77,6 +78,8 @@ def export_hddl(args: argparse.Namespace) -> int:
     mission = Mission.load(hddl, *mission_files, lenient_xml=args.lenient_xml) if mission_files else None
     if mission is not None:
         refuse_unsafe_outputs(outputs, [mission.world_path])
+        if not args.quiet:
+            warn_world_as_written(mission)
     export = HddlExport(mission.domain if mission is not None else load_domain(hddl))
     written = []
     texts = _texts(args, export, mission)

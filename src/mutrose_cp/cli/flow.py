@@ -43,21 +43,29 @@ def print_warning(warning: str) -> None:
 
 def load_mission(hddl: PathArgument, gm: PathArgument, cfg: PathArgument, *, lenient_xml: bool,
                  quiet: bool = False, uncertain: PathArgument | None = None, reads_uncertainty: bool = False,
-                 as_written: bool = False) -> Mission:
+                 as_written: bool = False, world_said_later: bool = False) -> Mission:
     """The mission, with the warnings of loading printed now and those of later stages as they
     are found (none with ``quiet``).  A command that ``reads_uncertainty`` reads the uncertainty
     file ``uncertain`` or the one the configuration names (unless ``as_written``); another says
-    that it reads the world as written."""
+    that it reads the world as written (unless ``world_said_later``: the caller says which world
+    it reads once it knows)."""
     mission = Mission.load(hddl, gm, cfg, lenient_xml=lenient_xml)
     if reads_uncertainty:
         read_uncertainty(mission, uncertain, as_written)
-    elif mission.configured_uncertainty() is not None and not quiet:
-        print_warning(f"{mission.config.locate('uncertainty')}: this command does not read the uncertainty file "
-                      f"{mission.configured_uncertainty()}: the world is read as written")
+    elif not quiet and not world_said_later:
+        warn_world_as_written(mission)
     if not quiet:
         report_warnings(mission)
     keep_until_exit(mission)  # with its stages, freed by the process's end, not one object at a time
     return mission
+
+
+def warn_world_as_written(mission: Mission) -> None:
+    """Say that this command reads the world as written, when the configuration names an
+    uncertainty file that it does not read."""
+    if mission.configured_uncertainty() is not None:
+        print_warning(f"{mission.config.locate('uncertainty')}: this command does not read the uncertainty file "
+                      f"{mission.configured_uncertainty()}: the world is read as written")
 
 
 def read_uncertainty(mission: Mission, uncertain: PathArgument | None, as_written: bool) -> None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from typing import Any
 
 from ..errors import MissionError, Problem
@@ -59,12 +60,15 @@ class _Reader:
             raise MissionError(Problem(self.doc.at(("uncertain",)), "uncertain: expected a list of entries"))
         found = [entry for i, item in enumerate(listed) if (entry := self.entry(item, ("uncertain", i))) is not None]
         seen: dict[tuple[str, str], str] = {}
+        unique = []
         for entry in found:
             earlier = seen.setdefault((entry.entity, entry.attribute), entry.where)
-            if earlier != entry.where:
+            if earlier != entry.where:  # reported here, and not resolved again
                 self.problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute} is already uncertain "
                                                           f"at {earlier}"))
-        return found, self.problems
+            else:
+                unique.append(entry)
+        return unique, self.problems
 
     def joints(self) -> list[JointEntry]:
         """The ``joint`` tables: facts that are not independent, with the probability of each
@@ -104,14 +108,14 @@ class _Reader:
             where: Path = (*path, i)
             values = outcome.get("values") if isinstance(outcome, dict) else None
             if not isinstance(outcome, dict) or set(outcome) != {"values", "probability"} or not isinstance(values, list) \
-                    or len(values) != size or not all(isinstance(v, (bool, int, float)) for v in values):
+                    or len(values) != size or not all(isinstance(v, bool) or _finite(v) is not None for v in values):
                 self.problem(where, f'expected {{"values": [one per fact, {size}], "probability": p}}')
                 return None
             p = self.probability(outcome["probability"], (*where, "probability"))
             if p is None:
                 return None
             key = tuple(v if isinstance(v, bool) else float(v) for v in values)
-            if any(key == earlier for earlier, _ in found):
+            if any(_same(key, earlier) for earlier, _ in found):
                 self.problem(where, "this combination of values is listed twice")
                 return None
             found.append((key, p))
@@ -157,15 +161,15 @@ class _Reader:
 
     def probability(self, value: Any, path: Path) -> float | None:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= 1 or math.isnan(value):
-            self.problem(path, f"expected a probability between 0 and 1, not {value!r}")
+            self.problem(path, f"expected a probability between 0 and 1, not {_shown(value)}")
             return None
         return float(value)
 
     def number(self, value: Any, path: Path) -> float | None:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            self.problem(path, f"expected a number, not {value!r}")
-            return None
-        return float(value)
+        number = _finite(value)
+        if number is None:
+            self.problem(path, f"expected a number, not {_shown(value)}")
+        return number
 
     def values(self, listed: Any, path: Path) -> tuple[Value, ...] | None:
         if not isinstance(listed, list) or not 2 <= len(listed) <= MAX_VALUES:
@@ -186,10 +190,7 @@ class _Reader:
         values: list[float] = []
         probabilities: list[float] = []
         for key, p in table.items():
-            try:
-                value = float(key)
-            except ValueError:
-                value = math.nan
+            value = float(key) if _DECIMAL.fullmatch(key.strip()) else math.nan
             if not math.isfinite(value):
                 self.problem((*path, key), f"{key!r} is not a number")
                 continue
@@ -206,3 +207,30 @@ class _Reader:
             self.problem(path, f"the probabilities add up to {math.fsum(probabilities):g}, not 1")
             return None, None
         return tuple(values), tuple(probabilities)
+
+
+#: a number as a distribution's key writes it: ASCII digits, a point, an exponent
+_DECIMAL = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+
+
+def _finite(value: Any) -> float | None:
+    """A JSON number as a finite float; None for anything else (a boolean, a string, a number
+    too large for a float)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
+def _same(first: tuple[Value, ...], second: tuple[Value, ...]) -> bool:
+    """Two combinations of values alike, a truth value never alike a number (``true`` is not 1)."""
+    return all(type(a) is type(b) and a == b for a, b in zip(first, second))
+
+
+def _shown(value: Any) -> str:
+    """A value as an error quotes it, cut short when long."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:37]}..."

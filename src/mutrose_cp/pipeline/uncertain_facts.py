@@ -30,6 +30,10 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
     read = _first_readings(goal_model)
     mappings = _AttributeMappings(config, sorts)
     for entry in entries:
+        if entry.attribute == config.world_db.unique_id:
+            problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute}: {entry.attribute} is the unique id "
+                                                 "that names the entity (world_db.unique_id), not a fact about it"))
+            continue
         try:
             fact = _goal_fact(entry, read[entry.attribute], mappings, knowledge) if entry.attribute in read \
                 else mappings.resolve(entry)
@@ -167,8 +171,12 @@ class _AttributeMappings:
         config, sorts = self.config, self.sorts
         mappings = self.by_name.get(entry.attribute, [])
         if not mappings:
-            mapped = sorted({m.name for m in config.semantic_mapping if m.type == "attribute" and m.name})
-            guess = closest(entry.attribute, mapped)
+            attributes = [m for m in config.semantic_mapping if m.type == "attribute" and m.name]
+            if any(m.name == entry.attribute for m in attributes):
+                raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: the configuration maps "
+                                                        f"{entry.attribute} only for robots or to no predicate or "
+                                                        "function, which the decomposer does not read of the world"))
+            guess = closest(entry.attribute, sorted({m.name for m in attributes}))
             raise MissionError(Problem(entry.where, f"{entry.entity}.{entry.attribute}: the configuration maps no "
                                                     f"attribute {entry.attribute} to a predicate or function"
                                                     + (f" (did you mean {guess}?)" if guess else "")))
