@@ -570,3 +570,27 @@ def test_commands_that_read_the_world_as_written_say_so(mission, capsys, tmp_pat
     status, _, err = run(capsys, "graph", str(mission), "--view", "decomposition", "--from-output", str(plan), "-o",
                          str(tmp_path / "w.dot"))
     assert status == 0 and said not in err and f"drawn in the world {plan} was expanded in" in err
+
+
+def test_a_joint_table_lists_only_the_scenarios_that_can_happen(tmp_path, capsys, monkeypatch):
+    """One sensor for the whole ward: every door locked and every patient away, or none, over 8
+    rooms (16 facts, 2 scenarios of 65,536).  Only the scenarios that can happen are listed, so
+    the answer is exact far below the listing limit, where listing every combination of the
+    facts would have given bounds."""
+    from mutrose_cp.solve import uncertain
+    folder = tmp_path / "ward"
+    shutil.copytree(EXAMPLE, folder)
+    rooms = [f"R{i}" for i in range(8)]
+    (folder / "knowledge" / "world_db.xml").write_text("<world_db>" + "".join(
+        f"<Room><name>{r}</name><dose_due>True</dose_due><door_locked>False</door_locked>"
+        f"<patient_present>True</patient_present><is_served>False</is_served></Room>" for r in rooms) + "</world_db>")
+    facts = [{"entity": r, "attribute": a} for r in rooms for a in ("door_locked", "patient_present")]
+    write_json(folder / "knowledge" / "uncertain.json", {"uncertain": facts, "joint": [{"facts": facts, "outcomes": [
+        {"values": [True] * 16, "probability": 0.5}, {"values": [False] * 16, "probability": 0.5}]}]})
+    monkeypatch.setattr(uncertain, "MAX_PAIRS", 100)
+    status, out, err = run(capsys, "count", str(folder))
+    assert (status, out) == (0, "2\n") and "bounds" not in err, err
+    assert run(capsys, "count", str(folder), "--robust", "-q")[:2] == (0, "0\n")
+    plan = tmp_path / "plan.json"
+    assert run(capsys, "decompose", str(folder), "--most-likely", "-o", str(plan), "-q")[0] == 0
+    assert json.loads(plan.read_text())["mission_decomposition_uncertainty"]["decompositions"][0]["probability"] == "0.5"

@@ -45,7 +45,7 @@ from ..model.uncertainty import (
     scenario_probability,
 )
 from ..pipeline.stages import MissionStages
-from .boolean_model import Clause
+from .boolean_model import Clause, Lit, neg
 from .cpsat import (
     Component,
     DecompositionSpace,
@@ -54,7 +54,7 @@ from .cpsat import (
     solve_components,
     split_components,
 )
-from .encoding import Encoder, Encoding
+from .encoding import UNCERTAIN, Encoder, Encoding
 
 #: at most this many uncertain facts of one component whose subsets are searched for sensing
 MAX_FACTS = 12
@@ -288,10 +288,7 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
     fact_of = {v: fact for fact, decoder in decoders.items() for v in decoder.variables}
     order = {f.atom: i for i, f in enumerate(uncertainty.facts)}
     var_to_dec = decomposition_variables(enc)
-    for joint in uncertainty.joints:  # facts that are not independent are decided together
-        linked = [decoders[f].variables[0] for f in joint.facts if f in decoders]
-        if len(linked) > 1:
-            enc.model.records.append(Clause((linked[0], -linked[0], *linked[1:])))  # always true: it only joins
+    _rule_out_impossible_scenarios(enc, uncertainty, decoders)
     kept: list[tuple[int, Component, list[UncertainFact]]] = []
     for number, comp in enumerate(split_components(enc)):
         facts = sorted({fact_of[v] for r in comp.records for v in r.variables() if v in fact_of},
@@ -310,6 +307,30 @@ def uncertain_space(stages: MissionStages) -> UncertainSpace:
     return UncertainSpace(enc, uncertainty, components, var_to_dec)
 
 
+def _rule_out_impossible_scenarios(enc: Encoding, uncertainty: Uncertainty,
+                                   decoders: Mapping[UncertainFact, "_Decoder"]) -> None:
+    """Post to the model that no scenario of probability 0 happens: a value of probability 0
+    is never taken, and the facts of a joint table take one of its outcomes of positive
+    probability (on the facts the domain reads).  So the listing never enumerates what cannot
+    happen (a table of two outcomes over 20 facts: 2 scenarios, not 2^20), and a table's facts
+    are decided together, in one component."""
+    m = enc.model
+    joined = {f.atom for j in uncertainty.joints for f in j.facts}
+    for fact, decoder in decoders.items():
+        if fact.probabilities is not None and fact.atom not in joined:
+            for value, p in zip(fact.values, fact.probabilities):
+                if p == 0:
+                    m.clause([neg(decoder.holds(value))])
+    for joint in uncertainty.joints:
+        read = [i for i, f in enumerate(joint.facts) if f in decoders]
+        if not read:
+            continue
+        combinations = sorted({tuple(outcome[i] for i in read) for outcome, p in joint.outcomes if p > 0}, key=repr)
+        m.clause([m.and_of([decoders[joint.facts[i]].holds(v) for i, v in zip(read, combination)],
+                           (UNCERTAIN, joint.facts[read[0]].atom, -1, ("outcome", combination)))
+                  for combination in combinations])
+
+
 @dataclass(frozen=True)
 class _Decoder:
     """A fact's variables in a solution, read as its value: the value of the true one (a
@@ -323,6 +344,12 @@ class _Decoder:
             if v in solution:
                 return value
         return False
+
+    def holds(self, value: Value) -> Lit:
+        """The literal true when the fact has ``value``."""
+        if len(self.variables) == 1 and self.values == (True,):
+            return self.variables[0] if value else neg(self.variables[0])
+        return self.variables[self.values.index(value)]
 
     def fixed(self, value: Value) -> list[Clause]:
         """Clauses that give the fact ``value``."""
