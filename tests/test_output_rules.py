@@ -108,7 +108,7 @@ def _batch_of(mission: Path) -> list[str]:
 BASE = {
     "batch": _batch_of,
     "decompose": lambda m: ["decompose", str(m), "-q"],
-    "allocate": lambda m: ["allocate", str(m), "--fleet", str(m / "fleet.json"), "-q", "--time-limit", "1"],
+    "allocate": lambda m: ["allocate", str(m), "--fleet", str(m / "fleet.json"), "-q", "--time-limit", "10"],
     "graph": lambda m: ["graph", str(m), "-q"],
     "export-hddl": lambda m: ["export-hddl", str(m), "-q"],
     "compare": lambda m: ["compare", str(m), "-q"],
@@ -235,13 +235,13 @@ def test_allocate_replaces_all_its_files_or_none(mission: Path, capsys):
     out.write_text("old decomposition")
     schedule.write_text("old schedule")
     os.mkfifo(chart)
-    status = main(["allocate", str(mission), "--fleet", str(mission / "fleet.json"), "-q", "--time-limit", "1",
+    status = main(["allocate", str(mission), "--fleet", str(mission / "fleet.json"), "-q", "--time-limit", "10",
                    "-o", str(out), "--schedule", str(schedule), "--gantt", str(chart)])
     assert status == 2 and "no process is reading this FIFO" in capsys.readouterr().err
     assert out.read_text() == "old decomposition" and schedule.read_text() == "old schedule"
     assert not list(mission.parent.glob(".*.tmp"))
     os.unlink(chart)
-    assert main(["allocate", str(mission), "--fleet", str(mission / "fleet.json"), "-q", "--time-limit", "1",
+    assert main(["allocate", str(mission), "--fleet", str(mission / "fleet.json"), "-q", "--time-limit", "10",
                  "-o", str(out), "--schedule", str(schedule), "--gantt", str(chart)]) == 0
     assert out.read_text() != "old decomposition" and schedule.read_text() != "old schedule" and chart.is_file()
 
@@ -261,7 +261,7 @@ def test_allocate_on_a_full_disk_keeps_every_old_file(mission: Path):
     out.write_text("old decomposition")
     schedule.write_text("old schedule")
     run = subprocess.run([sys.executable, "-m", "mutrose_cp", "allocate", str(mission), "--fleet",
-                          str(mission / "fleet.json"), "-q", "--time-limit", "1", "-o", str(out),
+                          str(mission / "fleet.json"), "-q", "--time-limit", "10", "-o", str(out),
                           "--schedule", str(schedule)], capture_output=True, text=True, timeout=120,
                          preexec_fn=_files_up_to(8000))
     assert run.returncode == 2, run.stderr

@@ -594,3 +594,24 @@ def test_a_joint_table_lists_only_the_scenarios_that_can_happen(tmp_path, capsys
     plan = tmp_path / "plan.json"
     assert run(capsys, "decompose", str(folder), "--most-likely", "-o", str(plan), "-q")[0] == 0
     assert json.loads(plan.read_text())["mission_decomposition_uncertainty"]["decompositions"][0]["probability"] == "0.5"
+
+
+def test_names_past_ascii_are_read_back_from_either_json_style(tmp_path, capsys):
+    """The original's JSON style writes each byte of a UTF-8 name as \\u00XX: validate and graph
+    read Zimmer_ü202 back as written in the world, in the tasks and in the world section."""
+    folder = tmp_path / "station"
+    shutil.copytree(EXAMPLE, folder)
+    for name in ("world_db.xml", "uncertain.json"):
+        path = folder / "knowledge" / name
+        path.write_text(path.read_text(encoding="utf-8").replace("Room202", "Zimmer_ü202"), encoding="utf-8")
+    u = write_json(tmp_path / "u.json", {"uncertain": [{"entity": "Zimmer_ü202", "attribute": "dose_due",
+                                                         "probability": 0.9}]})
+    for style in ("boost", "standard"):
+        plan = tmp_path / f"{style}.json"
+        assert run(capsys, "decompose", str(folder), "--uncertain", str(u), "--most-likely", "--json-style", style,
+                   "-o", str(plan), "-q")[0] == 0
+        assert ("Zimmer_\\u00C3\\u00BC202" in plan.read_text()) == (style == "boost")
+        status, out, err = run(capsys, "validate", str(folder), str(plan))
+        assert status == 0 and "Zimmer_ü202.dose_due = True" in err, out + err
+        assert run(capsys, "graph", str(folder), "--view", "decomposition", "--from-output", str(plan), "-o",
+                   str(tmp_path / f"{style}.dot"), "-q")[0] == 0

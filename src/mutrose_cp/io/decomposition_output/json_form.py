@@ -57,7 +57,8 @@ class _Document:
 
     def value(self, pos: int) -> tuple[Any, int]:
         try:
-            return _DECODER.raw_decode(self.text, pos)
+            value, end = _DECODER.raw_decode(self.text, pos)
+            return _utf8_text(value), end
         except json.JSONDecodeError as err:
             raise MissionError(json_syntax_problem(err, self.text, self.source)) from None
         except RecursionError:
@@ -233,6 +234,26 @@ def _section(doc: dict[str, Any], key: str, source: str) -> list[Any]:
     if items is None:
         raise MissionError(Problem(f"{source}: {key}", f"expected a list (or \"\"), not {type(doc[key]).__name__}"))
     return items
+
+
+def _utf8_text(value: Any) -> Any:
+    """``value`` with the original's escapes undone: its JSON style writes each byte of a
+    UTF-8 name as ``\\u00XX`` (``Zimmer_ü202`` as ``Zimmer_\\u00C3\\u00BC202``), so a
+    string of such characters that are the bytes of UTF-8 text is that text.  A string with
+    a character past U+00FF, or whose bytes are not UTF-8, is as written (the standard style's
+    ``\\u00FC`` is one ``ü``)."""
+    if isinstance(value, str):
+        if value.isascii() or max(value) > "\u00ff":
+            return value
+        try:
+            return value.encode("latin-1").decode("utf-8")
+        except UnicodeDecodeError:
+            return value
+    if isinstance(value, dict):
+        return {_utf8_text(k): _utf8_text(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_utf8_text(v) for v in value]
+    return value
 
 
 def read_json(text: str, source: str) -> DecompositionOutput:
