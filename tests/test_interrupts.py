@@ -12,11 +12,12 @@ import random
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 
-from mutrose_cp.interrupt import FAULT_ENV, Interrupted
+from mutrose_cp.interrupt import FAULT_ENV, Interrupted, signal_handlers
 from mutrose_cp.output.files import atomic_writer
 
 from missiongen import Action, GoalNode, Lit, Method, MissionSpec, Room, Task, TaskNode
@@ -122,3 +123,22 @@ def test_interrupted_while_expanding_the_worlds(tmp_path, sig):
         assert result.returncode == 128 + signal.Signals["SIG" + sig], result.stderr
         assert "interrupted while solving" in result.stderr and "Traceback" not in result.stderr
         assert result.stdout == "" and out.read_text() == SENTINEL and _leftovers(tmp_path) == []
+
+
+def test_a_second_signal_while_stopping_is_ignored():
+    """Once a command is stopping, a second Ctrl-C or a SIGTERM does not cut its cleaning up
+    short: the first signal is the one reported, and the command's handlers ignore the others
+    until they are gone (then the previous handlers are back)."""
+    before = signal.getsignal(signal.SIGINT)
+    with signal_handlers():
+        with pytest.raises(Interrupted) as stopped:
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(5)  # not reached: the handler raises first
+            finally:  # the cleaning up, interrupted again
+                os.kill(os.getpid(), signal.SIGINT)
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)
+        assert stopped.value.signum == signal.SIGINT
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+    assert signal.getsignal(signal.SIGINT) is before

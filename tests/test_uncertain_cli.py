@@ -535,7 +535,7 @@ def test_odd_values_in_the_uncertainty_file_are_located_once(tmp_path, capsys):
     bad.write_text(text)
     status, _, err = run(capsys, "check", str(EXAMPLE), "--uncertain", str(bad))
     assert status == 2 and "Traceback" not in err, err
-    assert f"{bad}:2:" in err and "uncertain[0].values[1]: expected a number, not 1000000000000000000000000000000000000..." in err
+    assert f"{bad}:2:" in err and "uncertain[0].values[1]: expected a number of at most 1e+12 either way, not 1000000000000000000000000000000000000..." in err
     assert f"{bad}:3:" in err and "Room202.name: name is the unique id that names the entity" in err
     assert err.count("Room203.patient_present is already uncertain") == 1
     assert f"{bad}:6:" in err and "'1_0' is not a number" in err
@@ -615,3 +615,37 @@ def test_names_past_ascii_are_read_back_from_either_json_style(tmp_path, capsys)
         assert status == 0 and "Zimmer_ü202.dose_due = True" in err, out + err
         assert run(capsys, "graph", str(folder), "--view", "decomposition", "--from-output", str(plan), "-o",
                    str(tmp_path / f"{style}.dot"), "-q")[0] == 0
+
+
+def test_options_that_cannot_say_what_they_assume_are_refused(tmp_path, capsys):
+    """--explain explains a known world, and iHTN files cannot name the world a mission was
+    expanded in: with uncertain facts, each is refused before anything is written."""
+    u = write_json(tmp_path / "u.json", {"uncertain": [
+        {"entity": "Room101", "attribute": "needs_disinfection", "probability": 0.3}]})
+    status, _, err = run(capsys, "decompose", str(HOSPITAL), "--uncertain", str(u), "--most-likely", "--ihtn",
+                         str(tmp_path / "ihtn"))
+    assert status == 2 and "iHTN files cannot name" in err and not (tmp_path / "ihtn").exists()
+    status, _, err = run(capsys, "decompose", str(EXAMPLE), "--explain", "-o", str(tmp_path / "x.json"))
+    assert status == 2 and "mutrose-cp explain says which facts to sense" in err and not (tmp_path / "x.json").exists()
+
+
+def test_a_world_number_beyond_the_model_is_refused_by_name(tmp_path, capsys):
+    """A stock of 10^300 written out in digits: the CP-SAT model would overflow its 64-bit
+    integers, so it is refused naming the function; the exploratory decomposer reads it."""
+    folder = tmp_path / "m"
+    shutil.copytree(EXAMPLE, folder)
+    config = folder / "configuration" / "configuration.json"
+    data = json.loads(config.read_text())
+    data["semantic_mapping"].append({"type": "attribute", "name": "stock", "relates_to": "Room", "belongs_to": "world_db",
+                                     "mapped_type": "function", "map": {"pred": "doses", "arg_sorts": ["room"]}})
+    config.write_text(json.dumps(data))
+    hddl = folder / "hddl" / "medication-round.hddl"
+    hddl.write_text(hddl.read_text().replace("    (:capabilities", "    (:functions (doses ?rm - room))\n\n    (:capabilities"))
+    world = folder / "knowledge" / "world_db.xml"
+    world.write_text(world.read_text().replace("<name>Room201</name>", f"<name>Room201</name><stock>-{10**300}</stock>"))
+    status, _, err = run(capsys, "count", str(folder), "--as-written")
+    assert status == 2 and "doses(Room201) starts at -1e+300 in the world, beyond the numbers" in err, err
+    assert run(capsys, "decompose", str(folder), "--as-written", "--algorithm", "exploratory", "-q", "-o",
+               str(tmp_path / "x.json"))[0] == 0
+    world.write_text(world.read_text().replace(f"-{10**300}", f"-{10**12}"))
+    assert run(capsys, "count", str(folder), "--as-written", "-q")[0] == 0

@@ -37,6 +37,10 @@ class Interrupted(BaseException):
 
 
 def _raise(signum: int, _frame: object) -> None:
+    # a second Ctrl-C while the first unwinds (outputs removed, the reason printed) is ignored:
+    # the command is already stopping, and must not stop halfway through its cleaning up
+    for s in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(s, signal.SIG_IGN)
     raise Interrupted(signum, current_phase())
 
 

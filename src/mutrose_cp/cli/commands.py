@@ -436,6 +436,14 @@ def _refuse_uncertainty_options(args: argparse.Namespace, mission: Mission) -> N
     if mission.uncertainty is not None and args.algorithm == "exploratory":
         raise MissionError("uncertain facts are decided by the CP-SAT decomposer (the default): drop --algorithm "
                            "exploratory, or the uncertainty file")
+    if mission.uncertainty is not None and getattr(args, "explain", False):
+        raise MissionError("--explain says why a known world has no decomposition; with uncertain facts, "
+                           "mutrose-cp explain says which facts to sense, and count --possible how many are valid "
+                           "for some value: drop --explain, or the uncertainty file (--as-written)")
+    if mission.expands_per_world and args.ihtn:
+        raise MissionError("the goal model reads uncertain facts, so the decompositions are of the mission expanded "
+                           "in one world, which iHTN files cannot name: write the JSON output, whose uncertainty "
+                           "section names it")
 
 
 def _solve(args: argparse.Namespace, mission: Mission, request: DecompositionRequest,

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import signal
 import sys
 from typing import Callable, Sequence
 
@@ -61,7 +62,11 @@ def entry() -> None:
     """The console script (and ``python -m mutrose_cp``): run the command and exit with its
     status."""
     process_ends_with_command()
-    exit_process(main())
+    try:
+        status = main()
+    except KeyboardInterrupt:  # a Ctrl-C after the command's own handlers are gone: stopping already
+        status = 128 + signal.SIGINT
+    exit_process(status)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -21,6 +21,7 @@ from typing import Any
 
 from ..errors import MissionError, Problem
 from ..model.uncertainty import JointEntry, UncertainEntry, Value
+from ..model.world import MAX_NUMBER
 from .located_json import LocatedJson, Path, path_text, read_located_json
 
 KEYS = ("entity", "attribute", "probability", "values", "distribution")
@@ -168,7 +169,7 @@ class _Reader:
     def number(self, value: Any, path: Path) -> float | None:
         number = _finite(value)
         if number is None:
-            self.problem(path, f"expected a number, not {_shown(value)}")
+            self.problem(path, f"expected a number of at most {MAX_NUMBER:.0e} either way, not {_shown(value)}")
         return number
 
     def values(self, listed: Any, path: Path) -> tuple[Value, ...] | None:
@@ -214,15 +215,15 @@ _DECIMAL = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
 
 
 def _finite(value: Any) -> float | None:
-    """A JSON number as a finite float; None for anything else (a boolean, a string, a number
-    too large for a float)."""
+    """A JSON number as a float; None for anything else (a boolean, a string, a number beyond
+    the decomposer's numbers, :data:`MAX_NUMBER`)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return None
     try:
         number = float(value)
     except OverflowError:
         return None
-    return number if math.isfinite(number) else None
+    return number if abs(number) <= MAX_NUMBER else None
 
 
 def _same(first: tuple[Value, ...], second: tuple[Value, ...]) -> bool:

@@ -144,6 +144,10 @@ class WorldKnowledge:
 
 Number = int | float
 
+#: the largest magnitude of a number the decomposers compute with: the CP-SAT model holds values
+#: in thousandths as 64-bit integers, with room left for the sums of increases (docs/numbers.md)
+MAX_NUMBER = 10**12
+
 
 @dataclass(frozen=True)
 class GroundLiteral:

@@ -11,7 +11,9 @@ from dataclasses import dataclass, field
 from typing import Any, Generic, Sequence, TypeVar
 
 from ..pipeline.constraints import Constraint
+from ..errors import MissionError
 from ..model import Configuration, Domain, GoalModel, InitialState
+from ..model.world import MAX_NUMBER
 from ..model.task_graph import TaskGraph
 from .boolean_model import BoolModel, Lit
 from .semantics import (
@@ -51,6 +53,12 @@ class EncodingState:
         self.m = model
         self.initial = initial_state(initial)
         self.facts, self.values = self.initial.facts, self.initial.values
+        beyond = next(((atom, v) for atom, v in self.values.items() if not abs(v) <= MAX_NUMBER), None)
+        if beyond is not None:  # a 64-bit integer in thousandths would overflow (docs/numbers.md)
+            (function, args), value = beyond
+            raise MissionError(f"{config.world_db.path}: {function}({', '.join(args)}) starts at {value:.6g} in the "
+                               f"world, beyond the numbers the CP-SAT decomposer computes with ({MAX_NUMBER:.0e} either "
+                               "way): write a smaller value, or decompose with --algorithm exploratory")
         # the effects of the decompositions that have any (a large mission's most have none)
         self.effects: dict[int, Effects] = {}
         for dv in tg.decompositions():
