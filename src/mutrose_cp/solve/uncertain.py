@@ -380,7 +380,8 @@ def _bounded(enc: Encoding, number: int, comp: Component, facts: Sequence[Uncert
              joints: Sequence[Joint]) -> UncertainComponent:
     """A component with too many (part, scenario) pairs to list, between bounds: its parts valid
     in one scenario that can happen (:func:`_likeliest`) are possible, and no other part is
-    robust; the pairs, counted, bound the possible parts from above."""
+    robust; the pairs, counted, bound the possible parts from above, and the robust ones too,
+    divided by the scenarios (each robust part is a pair with every one)."""
     likeliest = _likeliest(facts, joints)
     likely = Component([*comp.records, *(c for f in facts for c in decoders[f].fixed(likeliest[f.atom]))],
                        list(comp.choice_vars))
@@ -388,8 +389,12 @@ def _bounded(enc: Encoding, number: int, comp: Component, facts: Sequence[Uncert
     why = (f"part {number + 1} of the mission has {solved.count} pairs of a decomposition and a scenario of its "
            f"{len(facts)} uncertain facts ({', '.join(f.text for f in facts[:4])}{', ...' if len(facts) > 4 else ''}), "
            f"more than the {MAX_PAIRS} that are listed")
-    return UncertainComponent(number, tuple(facts), {}, list(comp.choice_vars),
-                              bounds=(likely.count, solved.count, likely.count), unlisted=why)
+    component = UncertainComponent(number, tuple(facts), {}, list(comp.choice_vars), joints=tuple(joints),
+                                   unlisted=why)
+    # a robust part is valid in the likeliest scenario, and is a pair with each of the scenarios
+    # that can happen (the model lists no other): at most the pairs over the scenarios
+    component.bounds = (likely.count, solved.count, min(likely.count, solved.count // max(component.scenarios, 1)))
+    return component
 
 
 def _likeliest(facts: Sequence[UncertainFact], joints: Sequence[Joint]) -> dict[AtomKey, Value]:
