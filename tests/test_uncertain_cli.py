@@ -62,7 +62,7 @@ def test_listed_decompositions_carry_their_assumptions_in_both_json_styles(missi
     assert len(section["decompositions"]) == len(listed["mission_decompositions"]) == 4
     assert sum(float(d["probability"]) for d in section["decompositions"]) == pytest.approx(1.0)
     typed = json.loads(standard.read_text())["mission_decomposition_uncertainty"]
-    assert typed["possible"] == 4 and typed["decompositions"][0]["robust"] is False
+    assert typed["possible"] == "4" and typed["decompositions"][0]["robust"] is False
     assert typed["decompositions"][0]["probability"] == pytest.approx(0.48)
     first = boost.read_bytes()
     assert run(capsys, "decompose", str(mission), "-o", str(boost), "-q")[0] == 0
@@ -649,3 +649,14 @@ def test_a_world_number_beyond_the_model_is_refused_by_name(tmp_path, capsys):
                str(tmp_path / "x.json"))[0] == 0
     world.write_text(world.read_text().replace(f"-{10**300}", f"-{10**12}"))
     assert run(capsys, "count", str(folder), "--as-written", "-q")[0] == 0
+
+
+def test_values_alike_in_thousandths_are_one_value(tmp_path, capsys):
+    """Numbers are told apart in thousandths, so 0 and 0.0001 would be one scenario counted
+    twice: refused, located, in values and distributions alike."""
+    bad = write_json(tmp_path / "close.json", {"uncertain": [
+        {"entity": "Room201", "attribute": "stock", "values": [0, 0.0001]},
+        {"entity": "Room202", "attribute": "stock", "distribution": {"1": 0.5, "1.0004": 0.5}}]})
+    status, _, err = run(capsys, "check", str(EXAMPLE), "--uncertain", str(bad))
+    assert status == 2 and "uncertain[0].values: a value is listed twice (values are told apart in thousandths)" in err
+    assert "uncertain[1].distribution.1.0004: the value 1.0004 is given twice" in err

@@ -144,6 +144,9 @@ class WorldKnowledge:
 
 Number = int | float
 
+#: numbers are compared as integers in thousandths (docs/numbers.md)
+SCALE = 1000
+
 #: the largest magnitude of a number the decomposers compute with: the CP-SAT model holds values
 #: in thousandths as 64-bit integers, with room left for the sums of increases (docs/numbers.md)
 MAX_NUMBER = 10**12

@@ -59,8 +59,10 @@ class UncertaintyRecord:
                 item["probability"] = scalar(judged.probability)
             item["needs"] = [fact.shown(value) for fact, value in judged.needs]
             decompositions.append(item)
-        section = {"uncertain_facts": facts, "possible": scalar(self.space.count(robust=False)),
-                   "robust": scalar(self.space.count(robust=True)), "decompositions": decompositions}
+        # counts stay strings in both styles, as mission_decomposition_space's count: they can
+        # have more digits than JSON readers hold in a number
+        section = {"uncertain_facts": facts, "possible": str(self.space.count(robust=False)),
+                   "robust": str(self.space.count(robust=True)), "decompositions": decompositions}
         if isinstance(self.space, ExpandedSpace):  # the world the tasks section was expanded in
             section["world"] = [{"entity": f.entry.entity, "attribute": f.entry.attribute, "value": value_text(v)}
                                 for f, v in zip(self.space.uncertainty.expanded, self.space.frame_world.world.values)]

@@ -37,7 +37,8 @@ from .boolean_model import (
     ValueAfter,
     neg,
 )
-from .numeric import SCALE, offset_gap, scaled
+from ..model.world import SCALE
+from .numeric import offset_gap, scaled
 from .semantics import (
     AtomKey,
     Seen,

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-SCALE = 1000  # numeric values are compared as integers in thousandths
+from ..model.world import SCALE  # numeric values are compared as integers in thousandths
 
 
 def scaled(value: float) -> int:
