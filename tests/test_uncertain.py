@@ -580,3 +580,31 @@ def test_an_attribute_mapped_to_two_predicates_is_uncertain_in_both(tmp_path):
     with pytest.raises(MissionError, match="u.json:1:.*Room202.door_locked is mapped to the predicate door-locked and "
                                            "the predicate badge-needed and the function locks"):
         Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries)).uncertainty
+
+
+def test_a_mapping_of_another_type_with_the_same_sort_is_not_an_alias(tmp_path):
+    """Room and Pharmacy are both HDDL rooms, and door_locked is mapped for each to its own
+    predicate: Room202 is a Room record, so its lock is door-locked(Room202) alone, as the world
+    reads it, not pharmacy-locked(Room202) too; against every world decomposed."""
+    folder = tmp_path / "mission"
+    shutil.copytree(ROOT / "examples" / "medication-round", folder)
+    hddl, gm, config = mission_files(folder)
+    data = json.loads(config.read_text())
+    del data["uncertainty"]
+    data["type_mapping"].append({"hddl_type": "room", "ocl_type": "Pharmacy"})
+    data["semantic_mapping"].insert(0, {"type": "attribute", "name": "door_locked", "relates_to": "Pharmacy",
+                                        "belongs_to": "world_db", "mapped_type": "predicate",
+                                        "map": {"pred": "pharmacy-locked", "arg_sorts": ["room"]}})
+    config.write_text(json.dumps(data))
+    gm.write_text(gm.read_text().replace('"Controls": "rooms : Sequence(Room)"', '"Controls": "rooms : Sequence(Room), ph : Pharmacy"'))
+    domain = hddl.read_text().replace("(door-locked ?rm - room)", "(door-locked ?rm - room)\n        (pharmacy-locked ?rm - room)")
+    badge = domain.index("enter-with-nurse-badge")
+    hddl.write_text(domain[:badge] + domain[badge:].replace("(door-locked ?rm)", "(door-locked ?rm)\n            (not (pharmacy-locked ?rm))", 1))
+    world = folder / "knowledge" / "world_db.xml"
+    world.write_text(world.read_text().replace("</world_db>", "<Pharmacy><name>Ph1</name><door_locked>True</door_locked>"
+                                                              "</Pharmacy></world_db>"))
+    entries: list[Entry] = [("Room202", "door_locked", 0.3)]
+    brute = BruteForce(hddl, gm, config, world, entries)
+    mission = Mission.load(hddl, gm, config, uncertainty=write_uncertainty(tmp_path / "u.json", entries))
+    assert mission.uncertainty.facts[0].atoms == (("door-locked", ("Room202",)),)
+    agree(mission, brute)

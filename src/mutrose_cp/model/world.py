@@ -91,8 +91,17 @@ class WorldKnowledge:
     @cached_property
     def entity_names(self) -> frozenset[str]:
         """The unique ids of every record of the document, nested ones included."""
-        return frozenset(rid for el in self.root.iter() if isinstance(el.tag, str)
-                         and (rid := record_id(el, self.unique_id)) is not None)
+        return frozenset(self.entity_tags)
+
+    @cached_property
+    def entity_tags(self) -> dict[str, frozenset[str]]:
+        """Each unique id's record tags (``Room``), nested records included: the types the
+        configuration's mappings read it as."""
+        tags: dict[str, set[str]] = {}
+        for el in self.root.iter():
+            if isinstance(el.tag, str) and el is not self.root and (rid := record_id(el, self.unique_id)) is not None:
+                tags.setdefault(rid, set()).add(el.tag)
+        return {rid: frozenset(found) for rid, found in tags.items()}
 
     def entity_records(self, root: etree._Element, entity: str) -> list[etree._Element]:
         """Every record of ``root`` (at any depth, in document order) whose unique id is
@@ -149,7 +158,7 @@ SCALE = 1000
 
 #: the largest magnitude of a number the decomposers compute with: the CP-SAT model holds values
 #: in thousandths as 64-bit integers, with room left for the sums of increases (docs/numbers.md)
-MAX_NUMBER = 10**12
+MAX_NUMBER = 10**15
 
 
 @dataclass(frozen=True)

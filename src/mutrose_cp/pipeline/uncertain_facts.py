@@ -28,7 +28,7 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
     facts: list[UncertainFact] = []
     seen: set[tuple[str, tuple[str, ...]]] = set()
     read = _first_readings(goal_model)
-    mappings = _AttributeMappings(config, sorts)
+    mappings = _AttributeMappings(config, sorts, knowledge)
     for entry in entries:
         if entry.attribute == config.world_db.unique_id:
             problems.append(Problem(entry.where, f"{entry.entity}.{entry.attribute}: {entry.attribute} is the unique id "
@@ -65,14 +65,15 @@ def resolve_uncertainty(entries: Iterable[UncertainEntry], source: str, config: 
 
 
 def _first_readings(goal_model: GoalModel) -> dict[str, GoalReading]:
-    """Each attribute the goal model reads: where first, and the kind of value, when some
-    condition tells (the first that does)."""
+    """Each attribute the goal model reads: where first, and the kind of value, when the
+    conditions that tell agree (one read bare and one compared tell nothing)."""
     read: dict[str, GoalReading] = {}
+    kinds: dict[str, set[str]] = {}
     for attribute, reading in goal_model_reads(goal_model):
-        first = read.setdefault(attribute, reading)
-        if not first.kind and reading.kind:
-            read[attribute] = first._replace(kind=reading.kind)
-    return read
+        read.setdefault(attribute, reading)
+        if reading.kind:
+            kinds.setdefault(attribute, set()).add(reading.kind)
+    return {a: r._replace(kind=next(iter(kinds[a])) if len(kinds.get(a, ())) == 1 else "") for a, r in read.items()}
 
 
 def _joints(joints: Iterable[JointEntry], facts: list[UncertainFact], problems: list[Problem]) -> list[Joint]:
@@ -138,9 +139,11 @@ def _goal_fact(entry: UncertainEntry, read: "GoalReading", mappings: "_Attribute
 class _AttributeMappings:
     """The configuration's attribute mappings by attribute name, read once for every entry."""
 
-    def __init__(self, config: Configuration, sorts: dict[str, frozenset[str]]) -> None:
+    def __init__(self, config: Configuration, sorts: dict[str, frozenset[str]],
+                 knowledge: WorldKnowledge | None = None) -> None:
         self.config = config
         self.sorts = sorts
+        self.knowledge = knowledge
         self.by_name: dict[str, list[SemanticMapping]] = {}
         for m in config.semantic_mapping:
             if m.type == "attribute" and m.mapped_type in ("predicate", "function") and m.relates_to.lower() != "robot":
@@ -151,13 +154,20 @@ class _AttributeMappings:
         the attribute for the entity's type: each starts with the fact's value), whether they are
         functions, and the first one's name; None when no mapping is for the entity's type.  An
         attribute mapped to a predicate and to a function is refused: one value cannot be both."""
+        candidates = [m for m in self.by_name.get(entry.attribute, [])
+                      if (hddl := self.config.type_mapping.get(m.relates_to)) is not None
+                      and entry.entity in self.sorts.get(hddl, frozenset())]
+        if len({m.relates_to for m in candidates}) > 1 and self.knowledge is not None:
+            # types that share an HDDL sort (Room and Pharmacy as room): the world reads a
+            # mapping of the records of its type only (the scan is made only for such a case)
+            tags = self.knowledge.entity_tags.get(entry.entity, frozenset())
+            candidates = [m for m in candidates if m.relates_to in tags]
         found: list[tuple[AtomKey, SemanticMapping]] = []
-        for m in self.by_name.get(entry.attribute, []):
-            hddl = self.config.type_mapping.get(m.relates_to)
-            if hddl is not None and entry.entity in self.sorts.get(hddl, frozenset()):
-                atom = (m.pred, (entry.entity,) * sum(1 for s in m.arg_sorts if s == hddl))
-                if all(atom != earlier for earlier, _ in found):
-                    found.append((atom, m))
+        for m in candidates:
+            hddl = self.config.type_mapping[m.relates_to]
+            atom = (m.pred, (entry.entity,) * sum(1 for s in m.arg_sorts if s == hddl))
+            if all(atom != earlier for earlier, _ in found):
+                found.append((atom, m))
         if not found:
             return None
         kinds = {m.mapped_type for _, m in found}

@@ -309,7 +309,7 @@ class Encoder(EncodingState):
         """A bound on the magnitude of a number's start value (scaled), uncertain or not."""
         if atom in self.number_values:
             return max(abs(scaled(v)) for v in self.number_values[atom]) + 1
-        return self._num_span(self.values.get(atom))
+        return self._num_span(self.start_value(atom))
 
     def _chain_root(self, atom: AtomKey, chains: dict[AtomKey, "Chain[V]"], start: Callable[[AtomKey], V],
                     numeric: bool) -> "Chain[V]":
@@ -339,7 +339,7 @@ class Encoder(EncodingState):
         not refuted; when ``required`` (the comparison must hold where ``required.lit`` is
         true), it is kept as a condition on the start value, checked against the others
         (:meth:`_start_values`)."""
-        init = self.values.get(atom)
+        init = self.start_value(atom)
         uncertain = atom in self.number_values
         if not writers:
             if uncertain:  # the choices of the values that compare so
@@ -409,7 +409,7 @@ class Encoder(EncodingState):
         :class:`ValueAfter` steps shared by the tests that see a common prefix of writers, and
         looked up by length for a prefix of all of them (as :meth:`_bool_value`); the variable is
         None before the first writer."""
-        init = self.values.get(atom)
+        init = self.start_value(atom)
         if atom in self.number_values:
             root = self._chain_root(atom, self.num_chains, lambda _: (TRUE, self._uncertain_number(atom)[1]), True)
         else:

@@ -13,7 +13,7 @@ from typing import Any, Generic, Sequence, TypeVar
 from ..pipeline.constraints import Constraint
 from ..errors import MissionError
 from ..model import Configuration, Domain, GoalModel, InitialState
-from ..model.world import MAX_NUMBER
+from ..model.world import MAX_NUMBER, Number
 from ..model.task_graph import TaskGraph
 from .boolean_model import BoolModel, Lit
 from .semantics import (
@@ -53,12 +53,6 @@ class EncodingState:
         self.m = model
         self.initial = initial_state(initial)
         self.facts, self.values = self.initial.facts, self.initial.values
-        beyond = next(((atom, v) for atom, v in self.values.items() if not abs(v) <= MAX_NUMBER), None)
-        if beyond is not None:  # a 64-bit integer in thousandths would overflow (docs/numbers.md)
-            (function, args), value = beyond
-            raise MissionError(f"{config.world_db.path}: {function}({', '.join(args)}) starts at {value:.6g} in the "
-                               f"world, beyond the numbers the CP-SAT decomposer computes with ({MAX_NUMBER:.0e} either "
-                               "way): write a smaller value, or decompose with --algorithm exploratory")
         # the effects of the decompositions that have any (a large mission's most have none)
         self.effects: dict[int, Effects] = {}
         for dv in tg.decompositions():
@@ -87,3 +81,14 @@ class EncodingState:
             for key, kind, amount in self.effects[d].numeric:
                 self.num_writers.setdefault(key, []).append((d, kind, amount))
         self.conflicts = ParallelConflicts(self.scopes, self.bool_writers)
+
+    def start_value(self, atom: AtomKey) -> Number | None:
+        """The world's value of a function, as the model reads it; one beyond what 64-bit
+        integers in thousandths hold is refused, naming the function (docs/numbers.md)."""
+        value = self.values.get(atom)
+        if value is not None and not abs(value) <= MAX_NUMBER:
+            function, args = atom
+            raise MissionError(f"{function}({', '.join(args)}) starts at {value:.6g} in the world, beyond the numbers "
+                               f"the CP-SAT decomposer computes with ({MAX_NUMBER:.0e} either way): write a smaller "
+                               "value, or decompose with --algorithm exploratory")
+        return value

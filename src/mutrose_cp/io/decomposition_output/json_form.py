@@ -30,6 +30,9 @@ class _Document:
     def __init__(self, text: str, source: str) -> None:
         self.text = text
         self.source = source
+        # the original's style escapes every byte past ASCII, so its file is ASCII throughout;
+        # the standard style writes UTF-8 as it is, and its strings are read as they are
+        self.escaped_bytes = text.isascii()
 
     def error(self, message: str, pos: int) -> MissionError:
         return MissionError(json_syntax_problem(json.JSONDecodeError(message, self.text, pos), self.text, self.source))
@@ -58,7 +61,7 @@ class _Document:
     def value(self, pos: int) -> tuple[Any, int]:
         try:
             value, end = _DECODER.raw_decode(self.text, pos)
-            return _utf8_text(value), end
+            return (_utf8_text(value) if self.escaped_bytes else value), end
         except json.JSONDecodeError as err:
             raise MissionError(json_syntax_problem(err, self.text, self.source)) from None
         except RecursionError:
@@ -240,8 +243,8 @@ def _utf8_text(value: Any) -> Any:
     """``value`` with the original's escapes undone: its JSON style writes each byte of a
     UTF-8 name as ``\\u00XX`` (``Zimmer_ü202`` as ``Zimmer_\\u00C3\\u00BC202``), so a
     string of such characters that are the bytes of UTF-8 text is that text.  A string with
-    a character past U+00FF, or whose bytes are not UTF-8, is as written (the standard style's
-    ``\\u00FC`` is one ``ü``)."""
+    a character past U+00FF, or whose bytes are not UTF-8, is as written.  Only for a file in
+    ASCII throughout, as the original's style writes it (the standard style writes UTF-8)."""
     if isinstance(value, str):
         if value.isascii() or max(value) > "\u00ff":
             return value
