@@ -268,18 +268,26 @@ def test_fifos_missing_files_and_outputs_onto_the_uncertainty_file(mission, caps
     assert status == 2
 
 
-def test_numeric_uncertain_facts_are_checked_and_decided(tmp_path, capsys):
-    """A distribution over a function must add up to 1; then it is decided like a boolean (a
-    number nothing reads changes no count) and written with its values and probabilities."""
+def with_function(tmp_path: Path, attribute: str, function: str) -> tuple[Path, Path]:
+    """examples/medication-round in ``tmp_path``, each room's ``attribute`` mapped to the function
+    ``function``, which the domain declares: the mission folder and its domain file."""
     folder = tmp_path / "m"
     shutil.copytree(EXAMPLE, folder)
     config = folder / "configuration" / "configuration.json"
     data = json.loads(config.read_text())
-    data["semantic_mapping"].append({"type": "attribute", "name": "stock", "relates_to": "Room", "belongs_to": "world_db",
-                                     "mapped_type": "function", "map": {"pred": "doses", "arg_sorts": ["room"]}})
+    data["semantic_mapping"].append({"type": "attribute", "name": attribute, "relates_to": "Room",
+                                     "belongs_to": "world_db", "mapped_type": "function",
+                                     "map": {"pred": function, "arg_sorts": ["room"]}})
     config.write_text(json.dumps(data))
     hddl = folder / "hddl" / "medication-round.hddl"
-    hddl.write_text(hddl.read_text().replace("    (:capabilities", "    (:functions (doses ?rm - room))\n\n    (:capabilities"))
+    hddl.write_text(hddl.read_text().replace("    (:capabilities", f"    (:functions ({function} ?rm - room))\n\n    (:capabilities"))
+    return folder, hddl
+
+
+def test_numeric_uncertain_facts_are_checked_and_decided(tmp_path, capsys):
+    """A distribution over a function must add up to 1; then it is decided like a boolean (a
+    number nothing reads changes no count) and written with its values and probabilities."""
+    folder, _ = with_function(tmp_path, "stock", "doses")
     u = folder / "knowledge" / "uncertain.json"
     u.write_text(json.dumps({"uncertain": [{"entity": "Room201", "attribute": "stock", "distribution": {"0": 0.5, "1": 0.4}}]}))
     status, _, err = run(capsys, "check", str(folder), "-q")
@@ -471,16 +479,8 @@ def test_equal_probabilities_tie_as_written_and_the_cheaper_plan_wins(tmp_path, 
     nurse's badge with 0.08 + 0.87 (a lock state above 0), which in floating point is
     0.9500000000000001: equal as written, so the tie goes to the cheaper plan, the door's (two
     actions, not three)."""
-    folder = tmp_path / "m"
-    shutil.copytree(EXAMPLE, folder)
-    config = folder / "configuration" / "configuration.json"
-    data = json.loads(config.read_text())
-    data["semantic_mapping"].append({"type": "attribute", "name": "lock_state", "relates_to": "Room",
-                                     "belongs_to": "world_db", "mapped_type": "function",
-                                     "map": {"pred": "lockstate", "arg_sorts": ["room"]}})
-    config.write_text(json.dumps(data))
-    hddl = folder / "hddl" / "medication-round.hddl"
-    domain = hddl.read_text().replace("    (:capabilities", "    (:functions (lockstate ?rm - room))\n\n    (:capabilities")
+    folder, hddl = with_function(tmp_path, "lock_state", "lockstate")
+    domain = hddl.read_text()
     badge = domain.index("(:method enter-with-nurse-badge")
     hddl.write_text(domain[:badge] + domain[badge:].replace("(door-locked ?rm)", "(> (lockstate ?rm) 0)", 1))
     world = folder / "knowledge" / "world_db.xml"
@@ -635,15 +635,8 @@ def test_a_world_number_beyond_the_model_is_refused_by_name(tmp_path, capsys):
     """A stock of 10^300 written out in digits, which a precondition reads: the CP-SAT model
     would overflow its 64-bit integers, so it is refused naming the function; the exploratory
     decomposer reads it, and a time in milliseconds is within the model's numbers."""
-    folder = tmp_path / "m"
-    shutil.copytree(EXAMPLE, folder)
-    config = folder / "configuration" / "configuration.json"
-    data = json.loads(config.read_text())
-    data["semantic_mapping"].append({"type": "attribute", "name": "stock", "relates_to": "Room", "belongs_to": "world_db",
-                                     "mapped_type": "function", "map": {"pred": "doses", "arg_sorts": ["room"]}})
-    config.write_text(json.dumps(data))
-    hddl = folder / "hddl" / "medication-round.hddl"
-    domain = hddl.read_text().replace("    (:capabilities", "    (:functions (doses ?rm - room))\n\n    (:capabilities")
+    folder, hddl = with_function(tmp_path, "stock", "doses")
+    domain = hddl.read_text()
     hddl.write_text(domain.replace("(not (door-locked ?rm))", "(not (door-locked ?rm))\n            (> (doses ?rm) 0)", 1))
     world = folder / "knowledge" / "world_db.xml"
     world.write_text(world.read_text().replace("<name>Room201</name>", f"<name>Room201</name><stock>{10**300}</stock>"))
