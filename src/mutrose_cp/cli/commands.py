@@ -436,7 +436,7 @@ def _refuse_uncertainty_options(args: argparse.Namespace, mission: Mission) -> N
     if mission.uncertainty is not None and args.algorithm == "exploratory":
         raise MissionError("uncertain facts are decided by the CP-SAT decomposer (the default): drop --algorithm "
                            "exploratory, or the uncertainty file")
-    if mission.uncertainty is not None and getattr(args, "explain", False):
+    if mission.uncertainty is not None and args.explain:
         raise MissionError("--explain says why a known world has no decomposition; with uncertain facts, "
                            "mutrose-cp explain says which facts to sense, and count --possible how many are valid "
                            "for some value: drop --explain, or the uncertainty file (--as-written)")
@@ -606,8 +606,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     hddl, gm, cfg, _folder = mission_paths(args)
     if args.plot:
         plot_format(args.plot)  # before anything runs
-        world = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml).world_path
-        refuse_unsafe_outputs((args.plot,), (hddl, gm, cfg, world))
+    mission = Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml) if args.plot or not args.quiet else None
+    if args.plot:
+        assert mission is not None
+        refuse_unsafe_outputs((args.plot,), (hddl, gm, cfg, mission.world_path))
     original = None
     if args.original:
         found = shutil.which(args.original)
@@ -615,8 +617,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
             raise MissionError("--original: not an executable file (the original tool, run as PATH HDDL GM CONFIG)",
                                args.original)
         original = Path(found).resolve()
-    if not args.quiet:
-        warn_world_as_written(Mission.load(hddl, gm, cfg, lenient_xml=args.lenient_xml))
+    if mission is not None and not args.quiet:
+        warn_world_as_written(mission)
     request = CompareRequest(hddl, gm, cfg, time_limit=args.time_limit, limit=args.limit or None, original=original,
                              lenient_xml=args.lenient_xml, max_input_mb=args.max_input_mb)
     report = compare(request, None if args.quiet else lambda message: print(message, file=sys.stderr))

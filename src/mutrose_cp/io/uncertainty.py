@@ -21,7 +21,7 @@ from typing import Any
 
 from ..errors import MissionError, Problem
 from ..model.uncertainty import JointEntry, UncertainEntry, Value
-from ..model.world import MAX_NUMBER, SCALE
+from ..model.world import MAX_NUMBER, scaled
 from .located_json import LocatedJson, Path, path_text, read_located_json
 
 KEYS = ("entity", "attribute", "probability", "values", "distribution")
@@ -179,7 +179,7 @@ class _Reader:
         numbers = [self.number(v, (*path, i)) for i, v in enumerate(listed)]
         if any(n is None for n in numbers):
             return None
-        if len({round(n * SCALE) for n in numbers if n is not None}) != len(numbers):
+        if len({scaled(n) for n in numbers if n is not None}) != len(numbers):
             self.problem(path, "a value is listed twice (values are told apart in thousandths)")
             return None
         return tuple(n for n in numbers if n is not None)
@@ -195,7 +195,7 @@ class _Reader:
             if not math.isfinite(value):
                 self.problem((*path, key), f"{key!r} is not a number")
                 continue
-            if any(round(value * SCALE) == round(v * SCALE) for v in values):
+            if any(scaled(value) == scaled(v) for v in values):
                 self.problem((*path, key), f"the value {key} is given twice (values are told apart in thousandths)")
                 continue
             checked = self.probability(p, (*path, key))

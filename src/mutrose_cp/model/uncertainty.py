@@ -122,30 +122,30 @@ def value_text(value: Value) -> str:
     return format(Decimal(repr(float(value))), "f")
 
 
+def scenario_factors(facts: Sequence[UncertainFact], joints: Sequence[Joint], values: Sequence[Value]
+                     ) -> list[float | None]:
+    """What the probability of ``facts`` having ``values`` is the product of: each joint table's
+    probability of its facts' values, and each other fact's probability of its value (None for a
+    fact without probabilities)."""
+    given = {f.atom: v for f, v in zip(facts, values)}
+    joined = {f.atom for j in joints for f in j.facts}
+    return [*(j.probability(given) for j in joints),
+            *(fact.probability(value) for fact, value in zip(facts, values) if fact.atom not in joined)]
+
+
 def scenario_can_happen(facts: Sequence[UncertainFact], joints: Sequence[Joint], values: Sequence[Value]) -> bool:
     """Whether ``facts`` having ``values`` has a positive probability: no joint table leaves the
     combination out and no fact has probability 0 for its value.  A fact without probabilities
     allows each of its values, and takes nothing from the others' probabilities of 0."""
-    given = {f.atom: v for f, v in zip(facts, values)}
-    joined = {f.atom for j in joints for f in j.facts}
-    if any(j.probability(given) <= 0 for j in joints):
-        return False
-    return all(fact.atom in joined or (p := fact.probability(value)) is None or p > 0
-               for fact, value in zip(facts, values))
+    return all(p is None or p > 0 for p in scenario_factors(facts, joints, values))
 
 
 def scenario_probability(facts: Sequence[UncertainFact], joints: Sequence[Joint], values: Sequence[Value]) -> float:
     """The probability of ``facts`` having ``values``: the product of the joint tables' (over the
     facts they hold) and of the other facts' own probabilities (every fact must have some)."""
-    given = {f.atom: v for f, v in zip(facts, values)}
-    joined = {f.atom for j in joints for f in j.facts}
-    p = math.prod(j.probability(given) for j in joints)
-    for fact, value in zip(facts, values):
-        if fact.atom not in joined:
-            probability = fact.probability(value)
-            assert probability is not None
-            p *= probability
-    return p
+    factors = scenario_factors(facts, joints, values)
+    assert None not in factors
+    return math.prod(p for p in factors if p is not None)
 
 
 @dataclass(frozen=True)

@@ -103,27 +103,30 @@ class WorldKnowledge:
                 tags.setdefault(rid, set()).add(el.tag)
         return {rid: frozenset(found) for rid, found in tags.items()}
 
-    def entity_records(self, root: etree._Element, entity: str) -> list[etree._Element]:
-        """Every record of ``root`` (at any depth, in document order) whose unique id is
-        ``entity``: the entity itself and every nested copy of it."""
-        return [el for el in root.iter() if isinstance(el.tag, str) and el is not root
-                and record_id(el, self.unique_id) == entity]
-
     def with_fields(self, values: Mapping[tuple[str, str], str]) -> "WorldKnowledge":
         """A copy of this world where each (entity, field) has the text given, in every record
         of the entity (the field added to a record that has none): the world of one scenario.
         Every record, not the first, because a query reads the top-level record, a path the
         nested one, and the domain each record of its type: a nested reference written before
-        the entity's own record must not take the value alone."""
+        the entity's own record must not take the value alone.  One pass over the copy."""
         root = copy.deepcopy(self.root)
+        fields: dict[str, list[tuple[str, str]]] = {}
         for (entity, name), text in values.items():
-            records = self.entity_records(root, entity)
-            assert records, entity  # checked when the uncertainty file was resolved
-            for record in records:
+            fields.setdefault(entity, []).append((name, text))
+        found: set[str] = set()
+        for record in root.iter():
+            if not isinstance(record.tag, str) or record is root:
+                continue
+            rid = record_id(record, self.unique_id)
+            if rid not in fields:
+                continue
+            found.add(rid)
+            for name, text in fields[rid]:
                 field = child(record, name)
                 if field is None:
                     field = etree.SubElement(record, name)
                 field.text = text
+        assert found == set(fields), set(fields) - found  # checked when the uncertainty file was resolved
         return WorldKnowledge(self.source, root, self.unique_id, self.warnings)
 
     # -- per-record helpers --------------------------------------------------------------------
@@ -155,6 +158,11 @@ Number = int | float
 
 #: numbers are compared as integers in thousandths (docs/numbers.md)
 SCALE = 1000
+
+
+def scaled(value: float) -> int:
+    """``value`` in thousandths: two values alike in thousandths are one value."""
+    return round(value * SCALE)
 
 #: the largest magnitude of a number the decomposers compute with: the CP-SAT model holds values
 #: in thousandths as 64-bit integers, with room left for the sums of increases (docs/numbers.md)

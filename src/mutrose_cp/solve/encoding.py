@@ -37,8 +37,8 @@ from .boolean_model import (
     ValueAfter,
     neg,
 )
-from ..model.world import SCALE
-from .numeric import offset_gap, scaled
+from ..model.world import SCALE, scaled
+from .numeric import offset_gap
 from .semantics import (
     AtomKey,
     Seen,

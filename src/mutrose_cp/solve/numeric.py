@@ -18,19 +18,12 @@ encoder as one clause per pair (:func:`offset_gap`), the exploratory algorithm a
 conditions met so far (:class:`StartConditions`).  (Two ``<>`` and an interval of one point can
 exclude each other only three at a time; a ``<>`` is therefore only compared with ``=``.)
 
-Values are compared in thousandths, as integers (:data:`SCALE`), as the CP-SAT model holds
-them, so both decomposers decide every comparison alike (docs/numbers.md).
+Values are compared in thousandths, as integers (:func:`mutrose_cp.model.world.scaled`), as the
+CP-SAT model holds them, so both decomposers decide every comparison alike (docs/numbers.md).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-
-from ..model.world import SCALE  # numeric values are compared as integers in thousandths
-
-
-def scaled(value: float) -> int:
-    """``value`` in thousandths."""
-    return round(value * SCALE)
 
 
 @dataclass(frozen=True, slots=True)

@@ -40,7 +40,8 @@ from ..model.task_graph import (
     TaskGraph,
     TaskVertex,
 )
-from .numeric import StartCondition, StartConditions, scaled
+from ..model.world import scaled
+from .numeric import StartCondition, StartConditions
 
 AtomKey = tuple[str, tuple[str, ...]]
 

@@ -352,10 +352,8 @@ class _Decoder:
         return self.variables[self.values.index(value)]
 
     def fixed(self, value: Value) -> list[Clause]:
-        """Clauses that give the fact ``value``."""
-        if len(self.variables) == 1 and self.values == (True,):
-            return [Clause((self.variables[0] if value else -self.variables[0],))]
-        return [Clause((v,) if option == value else (-v,)) for v, option in zip(self.variables, self.values)]
+        """Clauses that give the fact ``value`` (and none of its other values)."""
+        return [Clause((self.holds(option) if option == value else neg(self.holds(option)),)) for option in self.values]
 
 
 def _decided(enc: Encoding, number: int, comp: Component, facts: Sequence[UncertainFact],

@@ -19,6 +19,7 @@ from .fields import as_list, flag, require_sections, robots
 from .records import Capabilities, DecompositionOutput, OutputAction, OutputConstraint, OutputPredicate, OutputTask
 
 _SPACE = re.compile(r"[ \t\n\r]*")
+_ESCAPED_BYTE = re.compile(r"\\u00[89a-fA-F][0-9a-fA-F]")  # a byte past ASCII, as the original escapes it
 _DECODER = json.JSONDecoder()
 LISTING = "mission_decompositions"
 
@@ -31,8 +32,9 @@ class _Document:
         self.text = text
         self.source = source
         # the original's style escapes every byte past ASCII, so its file is ASCII throughout;
-        # the standard style writes UTF-8 as it is, and its strings are read as they are
-        self.escaped_bytes = text.isascii()
+        # the standard style writes UTF-8 as it is, and its strings are read as they are.  A
+        # file with no escaped byte at all (most) is read without walking its values again
+        self.escaped_bytes = text.isascii() and _ESCAPED_BYTE.search(text) is not None
 
     def error(self, message: str, pos: int) -> MissionError:
         return MissionError(json_syntax_problem(json.JSONDecodeError(message, self.text, pos), self.text, self.source))
