@@ -650,10 +650,14 @@ def test_a_world_number_beyond_the_model_is_refused_by_name(tmp_path, capsys):
 
 def test_values_alike_in_thousandths_are_one_value(tmp_path, capsys):
     """Numbers are told apart in thousandths, so 0 and 0.0001 would be one scenario counted
-    twice: refused, located, in values and distributions alike."""
+    twice: refused, located, in values and distributions alike; and a distribution's key is held
+    to the same limit as a value."""
     bad = write_json(tmp_path / "close.json", {"uncertain": [
         {"entity": "Room201", "attribute": "stock", "values": [0, 0.0001]},
-        {"entity": "Room202", "attribute": "stock", "distribution": {"1": 0.5, "1.0004": 0.5}}]})
+        {"entity": "Room202", "attribute": "stock", "distribution": {"1": 0.5, "1.0004": 0.5}},
+        {"entity": "Room203", "attribute": "stock", "distribution": {"1e20": 0.5, "2": 0.5}}]})
     status, _, err = run(capsys, "check", str(EXAMPLE), "--uncertain", str(bad))
     assert status == 2 and "uncertain[0].values: a value is listed twice (values are told apart in thousandths)" in err
     assert "uncertain[1].distribution.1.0004: the value 1.0004 is given twice" in err
+    # a key past the numbers the decomposer computes with, as a value of "values" is
+    assert "uncertain[2].distribution.1e20: expected a number of at most 1e+15 either way, not '1e20'" in err

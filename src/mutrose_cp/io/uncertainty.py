@@ -193,7 +193,10 @@ class _Reader:
         for key, p in table.items():
             value = float(key) if _DECIMAL.fullmatch(key.strip()) else math.nan
             if not math.isfinite(value):
-                self.problem((*path, key), f"{key!r} is not a number")
+                self.problem((*path, key), f"{_shown(key)} is not a number")
+                continue
+            if _finite(value) is None:  # the same limit as a value of "values"
+                self.problem((*path, key), f"expected a number of at most {MAX_NUMBER:.0e} either way, not {_shown(key)}")
                 continue
             if any(scaled(value) == scaled(v) for v in values):
                 self.problem((*path, key), f"the value {key} is given twice (values are told apart in thousandths)")
