@@ -373,7 +373,7 @@ def test_a_job_killed_at_its_time_limit_leaves_no_temporary_file(tmp_path):
     manifest = write_manifest(tmp_path / "m.json", [
         {"command": "decompose", "inputs": [str(hddl), str(gm), str(cfg)], "options": ["--algorithm", "exploratory"],
          "output": "out/big.json"}])
-    proc = _started(tmp_path, manifest.name, "--time-limit", "6")
+    proc = _started(tmp_path, manifest.name, "--time-limit", "20")  # time to reach the writing on a slow machine
     out = tmp_path / "out"
     _wait_for(lambda: out.is_dir() and any(p.name.endswith(".tmp") for p in out.iterdir()), proc, "the temporary file",
               seconds=60)
